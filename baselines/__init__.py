@@ -1,0 +1,1 @@
+"""Every synthesizer other than the DAM: references, classical models, neural predictors."""

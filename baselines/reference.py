@@ -55,6 +55,7 @@ class PhoneMean(_PerPhoneTable):
     """
 
     name = "phone-mean"
+    _tags = {"reference": True}  # the baseline the conformance suite measures others against
 
     def _fit(self, corpus: Corpus) -> None:
         index = {p: i for i, p in enumerate(self.phone_counts_)}

@@ -69,7 +69,8 @@ class Synthesizer:
 
     name: str = ""
     _tags: dict = {}
-    _default_tags = {"requires": (), "reads": ("phones",), "deterministic": True, "slow": False}
+    _default_tags = {"requires": (), "reads": ("phones",), "deterministic": True, "slow": False,
+                     "reference": False}
 
     # -- hyperparameters (scikit-learn conventions) ------------------------
     @classmethod
@@ -308,6 +309,11 @@ def read_model_file(path) -> tuple[dict, Any]:
     path = os.fspath(path)
     if not os.path.exists(path):
         raise ModelFileError(f"{path}: no such model file")
+    with open(path, "rb") as fh:
+        magic = fh.read(4)
+    if magic != b"PK\x03\x04":
+        raise ModelFileError(f"{path}: not a dam model file (it is not an npz archive; first bytes {magic!r}); "
+                             "write model files with model.save(path) or `dam fit`")
     try:
         arrays = np.load(path, allow_pickle=False)
     except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:

@@ -79,8 +79,8 @@ class Alignment:
     def __init__(self, labels: Sequence[str], starts, ends, *, source: str | None = None,
                  silence: str = SILENCE):
         labels = [canonical_label(lab, silence) for lab in labels]
-        starts = np.asarray(starts, dtype=float).ravel()
-        ends = np.asarray(ends, dtype=float).ravel()
+        starts = np.array(starts, dtype=float).ravel()  # copies: snapped below, frozen after
+        ends = np.array(ends, dtype=float).ravel()
         if not (len(labels) == len(starts) == len(ends)):
             raise DataError(source, "segments", (len(labels), len(starts), len(ends)),
                             "labels, starts and ends differ in length")

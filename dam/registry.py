@@ -13,6 +13,8 @@ import importlib
 _REGISTRY: dict[str, str] = {
     "phone-mean": "baselines.reference:PhoneMean",
     "target-interpolation": "baselines.reference:TargetInterpolation",
+    "dam": "dam.model:DAM",
+    "dam-m0": "dam.model:DAMM0",
 }
 _LOADED: dict[str, type] = {}
 

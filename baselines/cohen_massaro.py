@@ -1,0 +1,257 @@
+"""The Cohen–Massaro (1993) coarticulation model, fitted by nonlinear least squares.
+
+Every phone ``p`` has, for every control channel, a target ``T_p``, a
+magnitude ``alpha_p``, an anticipatory (left) rate ``theta_l_p``, a
+carry-over (right) rate ``theta_r_p`` and an exponent ``c_p``. Segment ``s``
+(phone ``p``, centre ``m_s``) dominates time ``t`` by the negative exponential
+
+    D_s(t) = alpha_p * exp(-theta * |tau|^c),  tau = m_s - t,
+    theta = theta_l_p before the centre (tau > 0), theta_r_p after it,
+
+and the trajectory is the dominance-weighted average of the targets
+
+    F(t) = sum_s D_s(t) T_p(s) / sum_s D_s(t).
+
+This is the 1993 model itself, with one dominance function per phone and per
+articulatory parameter (channel), as in the original paper; ``dam-m0`` (the DAM
+with constant animemes, the way Chen et al. built their comparison) is a
+different model and keeps its own row.
+
+Fitting: per channel, scipy's trust-region reflective least squares over
+``(T, log alpha, log theta_l, log theta_r, log c)`` of every phone with the
+exact Jacobian (:func:`residuals_and_jacobian`). The weighted average is
+invariant to scaling every ``alpha`` together; a weak ridge on the log
+dominance parameters (towards the starting values) fixes that gauge, so the
+geometric mean of the fitted ``alpha`` is 1, and keeps phones seen only once
+identifiable. Synthesis is numpy only.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from dam.base import Synthesizer
+from dam.data import Alignment, Corpus
+
+from .reference import PhoneMean
+
+__all__ = ["CohenMassaro", "dominance", "cohen_massaro_trajectory", "residuals_and_jacobian"]
+
+# Parameter blocks of one channel, each of length n_phones, in this order.
+BLOCKS = ("target", "log_alpha", "log_theta_left", "log_theta_right", "log_c")
+
+
+def dominance(tau, alpha, theta_left, theta_right, c):
+    """Cohen–Massaro dominance ``alpha * exp(-theta |tau|^c)``.
+
+    Parameters
+    ----------
+    tau : array-like
+        Segment centre minus time, in seconds (positive before the centre).
+    alpha, theta_left, theta_right, c : float or array-like (broadcast)
+
+    Returns
+    -------
+    ndarray, the shape of ``tau`` broadcast with the parameters
+    """
+    tau = np.asarray(tau, dtype=float)
+    theta = np.where(tau > 0, theta_left, theta_right)
+    return alpha * np.exp(-theta * np.abs(tau) ** c)
+
+
+class _Design:
+    """What the fit needs from one utterance: segment phones and centre-to-frame times.
+
+    ``tau`` has shape (n_frames, n_segments); ``phone`` (n_segments,) indexes
+    the phone table.
+    """
+
+    __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone")
+
+    def __init__(self, alignment: Alignment, phone_rows: np.ndarray, frame_rate: float, n_frames: int):
+        centres = 0.5 * (alignment.starts + alignment.ends)
+        t = np.arange(n_frames) / frame_rate
+        self.tau = centres[None, :] - t[:, None]
+        self.abs_tau = np.abs(self.tau)
+        with np.errstate(divide="ignore"):
+            self.log_abs_tau = np.where(self.abs_tau > 0, np.log(np.maximum(self.abs_tau, 1e-300)), 0.0)
+        self.before = self.tau > 0
+        self.phone = np.asarray(phone_rows, dtype=np.intp)
+
+
+def _weights(design: _Design, log_alpha, theta_l, theta_r, c):
+    """Normalised dominance (n_frames, n_segments) and ``theta |tau|^c`` per entry.
+
+    Computed in the log domain with the per-frame maximum subtracted, so far
+    frames never divide 0 by 0.
+    """
+    p = design.phone
+    theta = np.where(design.before, theta_l[p], theta_r[p])
+    power = design.abs_tau ** c[p]
+    log_d = log_alpha[p] - theta * power
+    log_d -= log_d.max(axis=1, keepdims=True)
+    w = np.exp(log_d)
+    w /= w.sum(axis=1, keepdims=True)
+    return w, theta * power
+
+
+def cohen_massaro_trajectory(design: _Design, target, log_alpha, theta_l, theta_r, c) -> np.ndarray:
+    """``F(t)`` of one channel at every frame of ``design``; parameters per phone, shape (n_phones,)."""
+    w, _ = _weights(design, log_alpha, theta_l, theta_r, c)
+    return w @ target[design.phone]
+
+
+def _unpack(x: np.ndarray, n_phones: int):
+    T, la, ll, lr, lc = x.reshape(len(BLOCKS), n_phones)
+    return T, la, np.exp(ll), np.exp(lr), np.exp(lc)
+
+
+def residuals_and_jacobian(x: np.ndarray, designs: list, targets: list, n_phones: int):
+    """Residuals ``F - y`` over all frames of one channel and their exact Jacobian.
+
+    Parameters
+    ----------
+    x : ndarray, shape (5 * n_phones,)
+        Blocks in the order of :data:`BLOCKS`.
+    designs : list of _Design
+    targets : list of ndarray, shape (n_frames,) each
+    n_phones : int
+
+    Returns
+    -------
+    r : ndarray, shape (n_total_frames,)
+    J : ndarray, shape (n_total_frames, 5 * n_phones)
+    """
+    T, la, th_l, th_r, c = _unpack(x, n_phones)
+    rs, Js = [], []
+    for d, y in zip(designs, targets):
+        w, tpow = _weights(d, la, th_l, th_r, c)
+        Tseg = T[d.phone]
+        F = w @ Tseg
+        onehot = np.zeros((len(d.phone), n_phones))
+        onehot[np.arange(len(d.phone)), d.phone] = 1.0
+        # dF/dphi = sum_s w_s dlogD_s/dphi (T_s - F) for a dominance parameter phi.
+        wdev = w * (Tseg[None, :] - F[:, None])
+        blocks = [w @ onehot,                                   # dF/dT_p
+                  wdev @ onehot,                                # dlogD/dlog alpha = 1
+                  (wdev * -np.where(d.before, tpow, 0.0)) @ onehot,  # left rate, before the centre
+                  (wdev * -np.where(d.before, 0.0, tpow)) @ onehot,  # right rate, after it
+                  (wdev * -(tpow * c[d.phone] * d.log_abs_tau)) @ onehot]  # d|tau|^c/dlog c
+        rs.append(F - y)
+        Js.append(np.hstack(blocks))
+    return np.concatenate(rs), np.vstack(Js)
+
+
+class CohenMassaro(Synthesizer):
+    """Cohen & Massaro (1993): negative-exponential dominance and weighted-average targets.
+
+    Parameters
+    ----------
+    ridge : float, default 1e-4
+        Weight of the penalty pulling the log dominance parameters towards
+        their starting values, relative to the mean squared (standardised)
+        data residual. Fixes the scale gauge of ``alpha``; keep it small.
+    max_nfev : int, default 200
+        Maximum function evaluations of the least-squares fit per channel.
+    c_bounds : tuple of float, default (0.25, 4.0)
+        Bounds on the exponent ``c``.
+    unknown_phone : {"error", "fallback"}, default "error"
+
+    Attributes
+    ----------
+    target_, alpha_, theta_left_, theta_right_, c_ : ndarray, shape (n_phones, n_channels)
+        Rows in the order of ``phones_``; rates in 1/s^c, times in seconds.
+    cost_ : ndarray, shape (n_channels,)
+        Final mean squared residual of each channel (channel units squared).
+    n_fev_ : ndarray of int, shape (n_channels,)
+    """
+
+    name = "cohen-massaro"
+    _tags = {"deterministic": True}
+
+    def __init__(self, *, ridge: float = 1e-4, max_nfev: int = 200, c_bounds: tuple = (0.25, 4.0),
+                 unknown_phone: str = "error"):
+        self.ridge = ridge
+        self.max_nfev = max_nfev
+        self.c_bounds = c_bounds
+        self.unknown_phone = unknown_phone
+
+    @classmethod
+    def get_test_params(cls) -> list[dict]:
+        return [{"max_nfev": 30}, {"max_nfev": 15, "ridge": 1e-3, "unknown_phone": "fallback"}]
+
+    def _check_params(self) -> None:
+        if self.unknown_phone not in ("error", "fallback"):
+            raise ValueError(f"CohenMassaro: parameter 'unknown_phone' is {self.unknown_phone!r}; "
+                             "use 'error' or 'fallback'")
+        if not (self.ridge >= 0):
+            raise ValueError(f"CohenMassaro: parameter 'ridge' is {self.ridge!r}; must be >= 0")
+        lo, hi = self.c_bounds
+        if not (0 < lo < hi):
+            raise ValueError(f"CohenMassaro: parameter 'c_bounds' is {self.c_bounds!r}; need 0 < low < high")
+
+    def _designs(self, corpus: Corpus) -> list:
+        index = {p: i for i, p in enumerate(self.phone_counts_)}
+        return [_Design(u.alignment, np.array([index[lab] for lab in u.alignment.labels]), u.frame_rate,
+                        u.n_frames) for u in corpus]
+
+    def _fit(self, corpus: Corpus) -> None:
+        from scipy.optimize import least_squares
+        P, C = len(self.phone_counts_), corpus.n_channels
+        designs = self._designs(corpus)
+        n_total = sum(u.n_frames for u in corpus)
+        dur = np.mean(np.concatenate([u.alignment.durations for u in corpus]))
+        # Start: dominance falls to 1/e one mean segment duration from the centre.
+        x0_dom = np.concatenate([np.zeros(P), np.full(P, -np.log(dur)), np.full(P, -np.log(dur)), np.zeros(P)])
+        lo = np.concatenate([np.full(P, -np.inf), np.full(P, -20.0), np.full(3 * P, -np.inf)])
+        hi = np.concatenate([np.full(P, np.inf), np.full(P, 20.0), np.full(3 * P, np.inf)])
+        lo[4 * P:], hi[4 * P:] = np.log(self.c_bounds[0]), np.log(self.c_bounds[1])
+        lo[2 * P:4 * P], hi[2 * P:4 * P] = np.log(1e-3), np.log(1e6)
+        means = PhoneMean().fit(corpus).table_  # rows in the order of phone_counts_, as ours
+        out = {k: np.zeros((P, C)) for k in ("target", "alpha", "theta_left", "theta_right", "c")}
+        self.cost_ = np.zeros(C)
+        self.n_fev_ = np.zeros(C, dtype=int)
+        lam = np.sqrt(self.ridge * n_total)
+        for ch in range(C):
+            ys = [u.trajectory[:, ch] for u in corpus]
+            mu, sd = np.mean(np.concatenate(ys)), np.std(np.concatenate(ys)) + 1e-12
+            ys = [(y - mu) / sd for y in ys]  # standardised: one ridge weight fits every channel
+            x0 = np.concatenate([(means[:, ch] - mu) / sd, x0_dom])
+            x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+
+            cache: dict = {}
+
+            def evaluate(x, ys=ys, cache=cache):
+                # least_squares asks for fun and jac at the same x: compute both once.
+                if cache.get("x") is None or not np.array_equal(cache["x"], x):
+                    cache["x"], cache["rJ"] = x.copy(), residuals_and_jacobian(x, designs, ys, P)
+                return cache["rJ"]
+
+            def fun(x, x0=x0):
+                return np.concatenate([evaluate(x)[0], lam * (x[P:] - x0[P:])])
+
+            def jac(x):
+                return np.vstack([evaluate(x)[1], np.hstack([np.zeros((4 * P, P)), lam * np.eye(4 * P)])])
+
+            res = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac",
+                                max_nfev=self.max_nfev)
+            T, la, th_l, th_r, c = _unpack(res.x, P)
+            out["target"][:, ch] = mu + sd * T
+            out["alpha"][:, ch] = np.exp(la)
+            out["theta_left"][:, ch], out["theta_right"][:, ch], out["c"][:, ch] = th_l, th_r, c
+            r, _ = residuals_and_jacobian(res.x, designs, ys, P)
+            self.cost_[ch] = float(np.mean(r ** 2) * sd ** 2)
+            self.n_fev_[ch] = res.nfev
+        self.target_, self.alpha_ = out["target"], out["alpha"]
+        self.theta_left_, self.theta_right_, self.c_ = out["theta_left"], out["theta_right"], out["c"]
+
+    def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
+        index = {p: i for i, p in enumerate(self.phone_counts_)}
+        rows = np.array([index[p] for p in self._known_labels(alignment, self.unknown_phone)])
+        d = _Design(alignment, rows, self.frame_rate_, n_frames)
+        out = np.empty((n_frames, len(self.channels_)))
+        for ch in range(len(self.channels_)):
+            out[:, ch] = cohen_massaro_trajectory(d, self.target_[:, ch], np.log(self.alpha_[:, ch]),
+                                                  self.theta_left_[:, ch], self.theta_right_[:, ch],
+                                                  self.c_[:, ch])
+        return out
+

@@ -1,0 +1,211 @@
+"""``NeuralSynthesizer``: what every neural predictor shares.
+
+A subclass says how to build its network and how to turn utterances into
+training samples and network outputs back into frames:
+
+``_make_network(n_inputs, n_outputs, key) -> equinox.Module``
+    Built from hyperparameters alone, so a saved model is rebuilt from its
+    parameters and its weight arrays (nothing is pickled).
+``_samples(encoder, utterance, y) -> (X, Y, W)``
+    Training samples of one utterance; ``y`` is its standardized trajectory.
+``_forward(network, encoder, alignment, n_frames) -> (n_frames, n_channels)``
+    Standardized prediction for one alignment.
+
+The base class standardizes the channels, splits off validation utterances,
+runs the one training loop (:func:`baselines.nn.train.train_network`) and
+keeps the weights as a list of numpy arrays (``weights_``) that the generic
+npz + JSON model format saves; the equinox network is rebuilt lazily on the
+first prediction after loading.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from dam.base import Synthesizer
+from dam.data import Alignment, Corpus
+
+from .encoders import ENCODERS, encoder_from_state, make_encoder
+
+__all__ = ["NeuralSynthesizer"]
+
+
+class NeuralSynthesizer(Synthesizer):
+    """Base class of the neural predictors (jax + equinox + optax).
+
+    Every subclass has these hyperparameters (besides its network's):
+
+    encoder : str, default "phones"
+        The input encoder (:data:`baselines.nn.encoders.ENCODERS`).
+    optimizer : {"adam", "sgd"}
+        optax Adam, or SGD with momentum 0.9.
+    learning_rate : float
+    batch_size : int
+    max_epochs : int
+    patience : int
+        Early stopping: epochs without a validation improvement before stopping.
+    validation_fraction : float
+        Fraction of the training utterances held out for early stopping
+        (whole utterances, at least one when the corpus has two or more;
+        0 disables early stopping).
+    dropout : float
+    random_state : int or None, default 0
+        Seeds the validation split, the initial weights, shuffling and
+        dropout (``jax.random.key``). None draws a fresh seed.
+    verbose : int, default 1
+        0 silences the progress bar (it is shown only on a terminal anyway).
+    unknown_phone : {"error", "fallback"}, default "error"
+
+    Attributes
+    ----------
+    weights_ : list of ndarray
+        The network's arrays in pytree order.
+    n_inputs_, n_outputs_ : int
+        Input and output width of the network.
+    encoder_state_ : dict
+        The fitted encoder (its vocabulary).
+    y_mean_, y_scale_ : ndarray, shape (n_channels,)
+        Channel standardization (the networks predict standardized values).
+    loss_curve_ : list of float
+        Mean training loss per epoch (standardized units, dropout on).
+    validation_curve_ : list of float
+        Validation loss per epoch (empty without validation).
+    initial_loss_ : float
+        Training loss of the untrained network.
+    n_epochs_, best_epoch_ : int
+        Epochs run; epoch whose weights were kept.
+    n_parameters_ : int
+        Number of trainable numbers.
+    """
+
+    _tags = {"requires": ("jax",), "deterministic": True, "slow": True}
+    _clip_norm: float | None = None  # recurrent networks clip their gradients
+
+    # -- hooks ---------------------------------------------------------------
+    def _make_network(self, n_inputs: int, n_outputs: int, key):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _samples(self, encoder, utterance, y: np.ndarray):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _forward(self, network, encoder, alignment: Alignment, n_frames: int) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def _check_network_params(self) -> None:
+        """Validate the network's own hyperparameters (override)."""
+
+    # -- validation ----------------------------------------------------------
+    def _check_params(self) -> None:
+        cls = type(self).__name__
+
+        def bad(name, rule):
+            raise ValueError(f"{cls}: parameter {name!r} is {getattr(self, name)!r}; {rule}")
+
+        for name in ("batch_size", "patience"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
+                bad(name, "must be a positive integer")
+        if not isinstance(self.max_epochs, (int, np.integer)) or self.max_epochs < 0:
+            bad("max_epochs", "must be a non-negative integer")
+        if not (isinstance(self.learning_rate, (int, float)) and self.learning_rate > 0):
+            bad("learning_rate", "must be a positive number")
+        if not (0.0 <= self.dropout < 1.0):
+            bad("dropout", "must be in [0, 1)")
+        if not (0.0 <= self.validation_fraction < 1.0):
+            bad("validation_fraction", "must be in [0, 1)")
+        if self.optimizer not in ("adam", "sgd"):
+            bad("optimizer", "use 'adam' or 'sgd'")
+        if self.encoder not in ENCODERS:
+            bad("encoder", f"available encoders: {', '.join(ENCODERS)}")
+        if self.unknown_phone not in ("error", "fallback"):
+            bad("unknown_phone", "use 'error' or 'fallback'")
+        if self.random_state is not None and not isinstance(self.random_state, (int, np.integer)):
+            bad("random_state", "must be an int or None")
+        self._check_network_params()
+
+    # -- fitting -------------------------------------------------------------
+    def _seed(self) -> int:
+        if self.random_state is None:
+            return int(np.random.default_rng().integers(2**31 - 1))
+        return int(self.random_state)
+
+    def _validation_split(self, corpus: Corpus, seed: int) -> tuple[list, list]:
+        utts = list(corpus)
+        n_val = int(round(self.validation_fraction * len(utts)))
+        if self.validation_fraction > 0 and len(utts) >= 2:
+            n_val = min(max(n_val, 1), len(utts) - 1)
+        else:
+            n_val = 0
+        order = np.random.default_rng(seed).permutation(len(utts))
+        val = set(order[:n_val].tolist())
+        return [u for i, u in enumerate(utts) if i not in val], [u for i, u in enumerate(utts) if i in val]
+
+    def _stack(self, encoder, utterances) -> tuple:
+        """Training samples of ``utterances``, concatenated: (X, Y, W)."""
+        if not utterances:
+            return None, None, None
+        parts = [self._samples(encoder, u, (u.trajectory - self.y_mean_) / self.y_scale_) for u in utterances]
+        return tuple(np.concatenate([p[i] for p in parts]) for i in range(3))
+
+    def _fit(self, corpus: Corpus) -> None:
+        import jax
+
+        from .train import make_optimizer, network_leaves, train_network
+
+        seed = self._seed()
+        encoder = make_encoder(self.encoder, corpus)
+        self.encoder_state_ = encoder.state()
+        Y = np.concatenate(corpus.trajectories)
+        self.y_mean_ = Y.mean(axis=0)
+        std = Y.std(axis=0)
+        self.y_scale_ = np.where(std > 1e-12, std, 1.0)
+        train, val = self._validation_split(corpus, seed)
+        X, Yt, W = self._stack(encoder, train)
+        Xv, Yv, Wv = self._stack(encoder, val)
+        self.n_inputs_, self.n_outputs_ = int(X.shape[-1]), int(Yt.shape[-1])
+        k_init, k_train = jax.random.split(jax.random.key(seed))
+        net = self._make_network(self.n_inputs_, self.n_outputs_, k_init)
+        net, hist = train_network(
+            net, X, Yt, W, X_val=Xv, Y_val=Yv, W_val=Wv,
+            optimizer=make_optimizer(self.optimizer, self.learning_rate, self._clip_norm),
+            batch_size=self.batch_size, max_epochs=self.max_epochs, patience=self.patience,
+            key=k_train, verbose=self.verbose, desc=self.name or type(self).__name__)
+        self._net = net
+        self._encoder = encoder
+        self.weights_ = network_leaves(net)
+        self.n_parameters_ = int(sum(w.size for w in self.weights_))
+        self.loss_curve_ = list(hist.loss_curve)
+        self.validation_curve_ = list(hist.validation_curve)
+        self.initial_loss_ = hist.initial_loss
+        self.n_epochs_ = len(hist.loss_curve)
+        self.best_epoch_ = hist.best_epoch
+
+    # -- prediction ----------------------------------------------------------
+    def _network(self):
+        """The equinox network, rebuilt from ``weights_`` after loading."""
+        if getattr(self, "_net", None) is None:
+            import jax
+
+            from .train import network_from_leaves
+            skeleton = self._make_network(self.n_inputs_, self.n_outputs_, jax.random.key(0))
+            self._net = network_from_leaves(skeleton, self.weights_)
+        return self._net
+
+    def _input_encoder(self):
+        if getattr(self, "_encoder", None) is None:
+            self._encoder = encoder_from_state(self.encoder_state_)
+        return self._encoder
+
+    def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
+        encoder = self._input_encoder()
+        vocab = set(getattr(encoder, "vocabulary", ()))
+        if vocab and any(lab not in vocab for lab in alignment.labels):
+            labels = self._known_labels(alignment, self.unknown_phone)
+            alignment = Alignment(labels, alignment.starts, alignment.ends, source=alignment.source,
+                                  silence=alignment.silence)
+        out = self._forward(self._network(), encoder, alignment, n_frames)
+        return out * self.y_scale_ + self.y_mean_
+
+    def _set_state(self, state: dict) -> None:
+        super()._set_state(state)
+        self._net = None
+        self._encoder = None

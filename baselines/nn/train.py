@@ -1,0 +1,289 @@
+"""The one training loop of the neural predictors, and their batched prediction.
+
+Every network here is an equinox module called on ONE sample as
+``net(x, mask, key=None)``: ``x`` a frame window ``(n_inputs,)`` or a
+sequence ``(length, n_inputs)``, ``mask`` the sample's validity (a scalar
+or ``(length,)``), ``key`` a PRNG key for dropout (``None`` means inference).
+Training samples are stacked arrays ``X (n, ...)``, ``Y (n, ..., n_outputs)``
+and weights ``W (n, ...)`` (0 on padding), so one loop serves the sliding
+window networks, the recurrent networks and the Transformer alike.
+
+The loop (:func:`train_network`): optax optimiser, explicit PRNG keys, one
+jit-compiled ``lax.scan`` per epoch over shuffled mini-batches, a validation
+set with early stopping on it (the weights of the best epoch are kept), and
+a tqdm progress bar on stderr showing the losses.
+
+Prediction (:func:`predict_padded`): the input is padded to a bucketed
+length (a power of two) so that the jit cache is reused across utterances of
+similar length; a second call with the same bucket never recompiles.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+
+__all__ = ["TrainHistory", "train_network", "make_optimizer", "weighted_mse", "predict_padded",
+           "bucket_length", "TRACE_COUNT", "network_leaves", "network_from_leaves"]
+
+# How many times the prediction function has been traced (compiled); the
+# tests read it to prove that a second prediction does not recompile.
+TRACE_COUNT = {"predict": 0}
+
+
+@dataclass
+class TrainHistory:
+    """What the training loop records.
+
+    Attributes
+    ----------
+    loss_curve : list of float
+        Mean training loss of each epoch (over its mini-batches, dropout on).
+    validation_curve : list of float
+        Validation loss after each epoch (dropout off); empty without a
+        validation set.
+    initial_loss : float
+        Training-set loss of the initial network (dropout off).
+    best_epoch : int
+        Epoch (1-based) whose weights were kept.
+    stopped_early : bool
+    """
+
+    loss_curve: list = field(default_factory=list)
+    validation_curve: list = field(default_factory=list)
+    initial_loss: float = float("nan")
+    best_epoch: int = 0
+    stopped_early: bool = False
+
+
+def make_optimizer(name: str, learning_rate: float, clip_norm: float | None = None):
+    """An optax optimiser: ``"adam"`` or ``"sgd"`` (momentum 0.9), optionally clipped."""
+    if name == "adam":
+        opt = optax.adam(learning_rate)
+    elif name == "sgd":
+        opt = optax.sgd(learning_rate, momentum=0.9)
+    else:
+        raise ValueError(f"parameter 'optimizer' is {name!r}; use 'adam' or 'sgd'")
+    if clip_norm:
+        opt = optax.chain(optax.clip_by_global_norm(clip_norm), opt)
+    return opt
+
+
+def weighted_mse(pred, y, w):
+    """Sum of ``w``-weighted squared errors (mean over outputs) and the sum of weights.
+
+    ``pred`` and ``y`` have shape ``w.shape + (n_outputs,)``.
+    """
+    se = jnp.mean((pred - y) ** 2, axis=-1)
+    return jnp.sum(se * w), jnp.sum(w)
+
+
+def _batched_apply(net, X, W, key):
+    """Apply ``net`` to every sample of a batch; ``key=None`` for inference."""
+    if key is None:
+        return jax.vmap(lambda x, m: net(x, m, key=None))(X, W)
+    keys = jax.random.split(key, X.shape[0])
+    return jax.vmap(lambda x, m, k: net(x, m, key=k))(X, W, keys)
+
+
+def _epoch_order(key, n: int, batch_size: int) -> jnp.ndarray:
+    """Shuffled sample indices shaped (n_batches, batch_size); the last batch is
+    filled up with the first indices of the permutation so shapes stay static."""
+    n_batches = max(1, math.ceil(n / batch_size))
+    perm = jax.random.permutation(key, n)
+    pad = n_batches * batch_size - n
+    perm = jnp.concatenate([perm, perm[:pad]]) if pad else perm
+    return perm.reshape(n_batches, batch_size)
+
+
+def _host(X, Y, W):
+    """Inputs keep a compact dtype (0/1 features as uint8); targets and weights float32."""
+    X = np.asarray(X)
+    X = X if X.dtype == np.uint8 else X.astype(np.float32)
+    return X, np.asarray(Y, dtype=np.float32), np.asarray(W, dtype=np.float32)
+
+
+def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer, batch_size: int,
+                  max_epochs: int, patience: int, key, verbose: int = 1, desc: str = "training",
+                  tol: float = 0.0):
+    """Fit ``net`` to ``(X, Y, W)`` by mini-batch gradient descent on the weighted MSE.
+
+    Parameters
+    ----------
+    net : equinox.Module
+        Called per sample as ``net(x, mask, key=...)``.
+    X, Y, W : ndarray
+        Inputs ``(n, ...)``, targets ``(n, ..., n_outputs)``, weights ``(n, ...)``.
+    X_val, Y_val, W_val : ndarray, optional
+        A validation set; with it, training stops when the validation loss
+        has not improved by more than ``tol`` (relative) for ``patience``
+        epochs and the best epoch's weights are returned.
+    optimizer : optax.GradientTransformation
+    batch_size, max_epochs, patience : int
+    key : jax PRNG key
+        Drives shuffling and dropout; the same key gives the same weights.
+    verbose : int, default 1
+        0 silences the progress bar; otherwise tqdm shows it on a terminal.
+    desc : str
+        Progress bar label.
+    tol : float, default 0.0
+        Minimum relative improvement of the validation loss that counts.
+
+    Returns
+    -------
+    net : equinox.Module
+        The trained network (best validation epoch when validating).
+    history : TrainHistory
+    """
+    from tqdm.auto import tqdm
+
+    params, static = eqx.partition(net, eqx.is_inexact_array)
+    opt_state = optimizer.init(params)
+    host = _host(X, Y, W)
+    X, Y, W = (jnp.asarray(a) for a in host)
+    n = X.shape[0]
+    eval_chunk = int(min(n, 1024))
+    batch_size = int(min(batch_size, n))
+    validate = X_val is not None and len(X_val) > 0
+    if validate:
+        host_val = _host(X_val, Y_val, W_val)
+
+    def batch_loss(p, xb, yb, wb, k):
+        pred = _batched_apply(eqx.combine(p, static), xb, wb, k)
+        s, c = weighted_mse(pred, yb, wb)
+        return s / jnp.maximum(c, 1e-12)
+
+    @jax.jit
+    def run_epoch(p, state, X, Y, W, key):
+        key, k_order, k_drop = jax.random.split(key, 3)
+        order = _epoch_order(k_order, n, batch_size)
+
+        def step(carry, idx_k):
+            p, state = carry
+            idx, kb = idx_k
+            loss, grads = jax.value_and_grad(batch_loss)(p, X[idx], Y[idx], W[idx], kb)
+            updates, state = optimizer.update(grads, state, p)
+            return (optax.apply_updates(p, updates), state), loss
+        keys = jax.random.split(k_drop, order.shape[0])
+        (p, state), losses = jax.lax.scan(step, (p, state), (order, keys))
+        return p, state, jnp.mean(losses), key
+
+    @jax.jit
+    def chunk_error(p, xb, yb, wb):
+        return weighted_mse(_batched_apply(eqx.combine(p, static), xb, wb, None), yb, wb)
+
+    def evaluate(p, X, Y, W):
+        # Host-side chunks of one compiled size; padded rows carry weight 0.
+        total = count = 0.0
+        for lo in range(0, X.shape[0], eval_chunk):
+            sl = [a[lo:lo + eval_chunk] for a in (X, Y, W)]
+            pad = eval_chunk - sl[0].shape[0]
+            if pad:
+                sl = [np.concatenate([a, np.zeros((pad,) + a.shape[1:], a.dtype)]) for a in sl]
+            s, c = chunk_error(p, *sl)
+            total, count = total + float(s), count + float(c)
+        return total / max(count, 1e-12)
+
+    history = TrainHistory(initial_loss=evaluate(params, *host))
+    best = (math.inf, params, 0)
+    bar = tqdm(range(1, max_epochs + 1), desc=desc, file=sys.stderr, leave=False,
+               disable=True if not verbose else None)
+    since_best = 0
+    for epoch in bar:
+        params, opt_state, loss, key = run_epoch(params, opt_state, X, Y, W, key)
+        loss = float(loss)
+        if not math.isfinite(loss):
+            raise FloatingPointError(f"{desc}: the training loss became {loss} at epoch {epoch}; "
+                                     "lower the learning rate")
+        history.loss_curve.append(loss)
+        shown = {"loss": f"{loss:.4g}"}
+        if validate:
+            val = evaluate(params, *host_val)
+            history.validation_curve.append(val)
+            shown["val"] = f"{val:.4g}"
+            if val < best[0] * (1.0 - tol):
+                best, since_best = (val, params, epoch), 0
+            else:
+                since_best += 1
+        else:
+            best = (loss, params, epoch)
+        bar.set_postfix(shown, refresh=False)
+        if validate and since_best >= patience:
+            history.stopped_early = True
+            break
+    bar.close()
+    if max_epochs > 0:
+        params = best[1]
+        history.best_epoch = best[2]
+    return eqx.combine(params, static), history
+
+
+def bucket_length(n: int, minimum: int = 64) -> int:
+    """The padded length for ``n`` rows: the next power of two, at least ``minimum``."""
+    return max(minimum, 1 << max(0, int(n - 1).bit_length()))
+
+
+@eqx.filter_jit
+def _predict_rows(net, X, W):
+    TRACE_COUNT["predict"] += 1  # runs only while tracing
+    return _batched_apply(net, X, W, None)
+
+
+def predict_padded(net, X, W=None, *, sequence: bool = False) -> np.ndarray:
+    """Run ``net`` in inference mode with the input padded to a bucketed length.
+
+    Parameters
+    ----------
+    net : equinox.Module
+    X : ndarray, shape (n, n_inputs) or (n, window, n_inputs)
+        Independent samples (``sequence=False``) or, with ``sequence=True``,
+        the frames of one sequence ``(n, n_inputs)``.
+    W : ndarray, shape (n,), optional
+        Sample validity (defaults to ones).
+    sequence : bool, default False
+
+    Returns
+    -------
+    ndarray, shape (n, ...)
+        The network outputs of the ``n`` real rows, float64.
+    """
+    X = np.asarray(X, dtype=np.float32)
+    n = X.shape[0]
+    W = np.ones(n, np.float32) if W is None else np.asarray(W, np.float32)
+    m = bucket_length(n)
+    Xp = np.zeros((m,) + X.shape[1:], np.float32)
+    Xp[:n] = X
+    Wp = np.zeros(m, np.float32)
+    Wp[:n] = W
+    if sequence:  # one sequence: a batch of one
+        out = _predict_rows(net, Xp[None], Wp[None])[0]
+    else:
+        out = _predict_rows(net, Xp, Wp)
+    return np.asarray(out[:n], dtype=float)
+
+
+def network_leaves(net) -> list[np.ndarray]:
+    """The arrays of an equinox network, in pytree order (for saving)."""
+    return [np.asarray(leaf) for leaf in jax.tree_util.tree_leaves(eqx.filter(net, eqx.is_array))]
+
+
+def network_from_leaves(skeleton, leaves) -> "eqx.Module":
+    """Put saved ``leaves`` into ``skeleton`` (a network of the same hyperparameters).
+
+    Raises ValueError if the number or the shapes of the arrays differ.
+    """
+    params, static = eqx.partition(skeleton, eqx.is_array)
+    old, treedef = jax.tree_util.tree_flatten(params)
+    if len(old) != len(leaves):
+        raise ValueError(f"the saved weights hold {len(leaves)} arrays, the network needs {len(old)}")
+    for i, (a, b) in enumerate(zip(old, leaves)):
+        if tuple(a.shape) != tuple(np.shape(b)):
+            raise ValueError(f"saved weight array {i} has shape {np.shape(b)}, the network needs {a.shape}")
+    new = [jnp.asarray(b, dtype=a.dtype) for a, b in zip(old, leaves)]
+    return eqx.combine(jax.tree_util.tree_unflatten(treedef, new), static)

@@ -1,0 +1,219 @@
+"""Mode selection over the animeme graph (Chen et al. 2012, Section VI, Eq. 10).
+
+The graph has one layer per segment and one node per mode of its phone.
+A path picks one mode per segment and costs::
+
+    E = sum_j w_c E_c(j, g_j) + sum_{j>0} w_s E_s(g_{j-1}, g_j)
+
+* ``E_c`` (data term): the negative log-likelihood of mode ``g`` given the
+  phone and its left and right neighbour phones, estimated from the training
+  modes with back-off: the (left, right) trigram context if it was seen in
+  training; else the left and the right bigram contexts (the mean of the
+  seen ones' distributions); else the phone's unigram mode frequencies. Each
+  distribution is smoothed additively (``alpha``). The utterance edges count
+  as the neighbour ``BOUNDARY``.
+* ``E_s`` (smoothness): the C2 jump between the two *animemes* at their joint:
+  the squared differences of value, first and second time derivative of
+  ``A_{j-1}`` at its end (t = 1) and ``A_j`` at its start (t = 0), derivatives
+  taken per second (local-time derivatives divided by the duration^k) and made
+  dimensionless by ``tau^k`` (``tau`` the median training phone duration),
+  each channel divided by its training standard deviation, summed over
+  channels. (The concatenated signal of Eq. 2 is C1 at every joint by
+  construction, so its own jump says little; the animemes' jump says how well
+  two modes connect.)
+
+:func:`astar` finds the cheapest path with the admissible and consistent
+heuristic ``h(j) = sum_{k>j} min_g w_c E_c(k, g)`` (smoothness costs are
+non-negative); :func:`viterbi` (dynamic programming) and :func:`exhaustive`
+(enumeration) are the references the tests hold it to.
+
+numpy only: this module is on the load + predict path of a saved model.
+"""
+from __future__ import annotations
+
+import heapq
+import itertools
+
+import numpy as np
+
+__all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "astar", "viterbi",
+           "exhaustive", "path_cost"]
+
+BOUNDARY = "#"
+
+
+def context_counts(labels_per_utt, modes_per_utt, n_modes: dict) -> dict:
+    """Mode counts of every phone in its trigram, left, right and unigram contexts.
+
+    Parameters
+    ----------
+    labels_per_utt : list of sequence of str
+    modes_per_utt : list of sequence of int
+        Local mode (0 .. n_modes[phone] - 1) of each segment.
+    n_modes : dict str -> int
+
+    Returns
+    -------
+    dict
+        ``{phone: {"unigram": [counts], "left": {L: [counts]}, "right": {R: [counts]},
+        "trigram": {L: {R: [counts]}}}}``; JSON-able.
+    """
+    stats: dict = {}
+    for labels, modes in zip(labels_per_utt, modes_per_utt):
+        padded = [BOUNDARY, *labels, BOUNDARY]
+        for j, (p, g) in enumerate(zip(labels, modes)):
+            L, R = padded[j], padded[j + 2]
+            G = n_modes[p]
+            st = stats.setdefault(p, {"unigram": [0] * G, "left": {}, "right": {}, "trigram": {}})
+            st["unigram"][g] += 1
+            st["left"].setdefault(L, [0] * G)[g] += 1
+            st["right"].setdefault(R, [0] * G)[g] += 1
+            st["trigram"].setdefault(L, {}).setdefault(R, [0] * G)[g] += 1
+    return stats
+
+
+def _smoothed(counts, alpha: float) -> np.ndarray:
+    c = np.asarray(counts, dtype=float)
+    return (c + alpha) / (c.sum() + alpha * c.size)
+
+
+def mode_nll(stats: dict, phone: str, left: str, right: str, n_modes: int, alpha: float = 0.5):
+    """``E_c``: negative log-likelihood of each mode of ``phone`` in context (left, right).
+
+    Returns
+    -------
+    ndarray, shape (n_modes,)
+    level : str
+        Which context answered: "trigram", "bigram" or "unigram".
+    """
+    if n_modes == 1:
+        return np.zeros(1), "unigram"
+    st = stats.get(phone)
+    if st is None:
+        return np.full(n_modes, np.log(n_modes)), "unigram"
+    tri = st["trigram"].get(left, {}).get(right)
+    if tri is not None and sum(tri) > 0:
+        return -np.log(_smoothed(tri, alpha)), "trigram"
+    seen = [c for c in (st["left"].get(left), st["right"].get(right)) if c is not None and sum(c) > 0]
+    if seen:
+        return -np.log(np.mean([_smoothed(c, alpha) for c in seen], axis=0)), "bigram"
+    return -np.log(_smoothed(st["unigram"], alpha)), "unigram"
+
+
+def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev: float, dur_cur: float,
+                     tau: float, scale: np.ndarray) -> np.ndarray:
+    """``E_s`` for every pair (mode of segment j-1, mode of segment j).
+
+    Parameters
+    ----------
+    edge_prev : ndarray, shape (G_prev, 3, n_channels)
+        Value, first and second local-time derivative of each previous animeme at t = 1.
+    edge_cur : ndarray, shape (G_cur, 3, n_channels)
+        The same for each current animeme at t = 0.
+    dur_prev, dur_cur : float
+        Durations (seconds) of the two segments.
+    tau : float
+        Time scale (seconds) that makes the derivatives dimensionless.
+    scale : ndarray, shape (n_channels,)
+        Channel standard deviations.
+
+    Returns
+    -------
+    ndarray, shape (G_prev, G_cur)
+    """
+    k = np.arange(edge_prev.shape[1])[:, None]
+    p = edge_prev * (tau / dur_prev) ** k / scale
+    c = edge_cur * (tau / dur_cur) ** k / scale
+    return ((p[:, None] - c[None, :]) ** 2).sum(axis=(2, 3))
+
+
+def path_cost(path, node_costs, edge_costs) -> float:
+    """Total cost of ``path`` (one mode index per layer)."""
+    total = float(node_costs[0][path[0]])
+    for j in range(1, len(path)):
+        total += float(edge_costs[j - 1][path[j - 1], path[j]] + node_costs[j][path[j]])
+    return total
+
+
+def astar(node_costs, edge_costs):
+    """Cheapest path through a layered graph by A*.
+
+    Parameters
+    ----------
+    node_costs : list of ndarray, layer j has shape (G_j,)
+        Non-negative weighted data costs ``w_c E_c``.
+    edge_costs : list of ndarray, entry j-1 has shape (G_{j-1}, G_j)
+        Non-negative weighted smoothness costs ``w_s E_s``.
+
+    Returns
+    -------
+    path : list of int, length n_layers
+    cost : float
+    """
+    J = len(node_costs)
+    if J == 0:
+        return [], 0.0
+    mins = np.array([float(np.min(n)) for n in node_costs])
+    # h[j]: cheapest possible remaining node costs after layer j (admissible, consistent)
+    h = np.concatenate([np.cumsum(mins[::-1])[::-1][1:], [0.0]])
+    best = {}
+    parent = {}
+    tie = itertools.count()
+    heap = []
+    for g, c in enumerate(node_costs[0]):
+        c = float(c)
+        best[(0, g)] = c
+        heapq.heappush(heap, (c + h[0], next(tie), 0, g, c))
+    closed = set()
+    while heap:
+        _, _, j, g, cost = heapq.heappop(heap)
+        if (j, g) in closed:
+            continue
+        closed.add((j, g))
+        if j == J - 1:
+            path = [g]
+            while (j, g) in parent:
+                g = parent[(j, g)]
+                j -= 1
+                path.append(g)
+            return path[::-1], cost
+        nxt, edges = node_costs[j + 1], edge_costs[j][g]
+        for g2 in range(len(nxt)):
+            c2 = cost + float(edges[g2]) + float(nxt[g2])
+            key = (j + 1, g2)
+            if key not in closed and c2 < best.get(key, np.inf):
+                best[key] = c2
+                parent[key] = g
+                heapq.heappush(heap, (c2 + h[j + 1], next(tie), j + 1, g2, c2))
+    raise RuntimeError("A* found no path (empty layer?)")  # pragma: no cover
+
+
+def viterbi(node_costs, edge_costs):
+    """Cheapest path by dynamic programming (the reference for :func:`astar`)."""
+    J = len(node_costs)
+    if J == 0:
+        return [], 0.0
+    acc = np.asarray(node_costs[0], dtype=float)
+    back = []
+    for j in range(1, J):
+        tot = acc[:, None] + np.asarray(edge_costs[j - 1], dtype=float)
+        arg = np.argmin(tot, axis=0)
+        back.append(arg)
+        acc = tot[arg, np.arange(tot.shape[1])] + np.asarray(node_costs[j], dtype=float)
+    g = int(np.argmin(acc))
+    cost = float(acc[g])
+    path = [g]
+    for arg in reversed(back):
+        g = int(arg[g])
+        path.append(g)
+    return path[::-1], cost
+
+
+def exhaustive(node_costs, edge_costs):
+    """Cheapest path by enumerating every path (tiny graphs only)."""
+    best_path, best_cost = None, np.inf
+    for path in itertools.product(*[range(len(n)) for n in node_costs]):
+        c = path_cost(path, node_costs, edge_costs)
+        if c < best_cost:
+            best_path, best_cost = list(path), c
+    return best_path, best_cost

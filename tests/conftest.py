@@ -1,0 +1,8 @@
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+# Tests run against the working tree, installed or not.
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))

@@ -36,8 +36,8 @@ import itertools
 
 import numpy as np
 
-__all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "astar", "viterbi",
-           "exhaustive", "path_cost"]
+__all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "pad_layers", "astar",
+           "viterbi", "exhaustive", "path_cost"]
 
 BOUNDARY = "#"
 
@@ -100,17 +100,17 @@ def mode_nll(stats: dict, phone: str, left: str, right: str, n_modes: int, alpha
     return -np.log(_smoothed(st["unigram"], alpha)), "unigram"
 
 
-def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev: float, dur_cur: float,
+def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev, dur_cur,
                      tau: float, scale: np.ndarray) -> np.ndarray:
     """``E_s`` for every pair (mode of segment j-1, mode of segment j).
 
     Parameters
     ----------
-    edge_prev : ndarray, shape (G_prev, 3, n_channels)
+    edge_prev : ndarray, shape (..., G_prev, 3, n_channels)
         Value, first and second local-time derivative of each previous animeme at t = 1.
-    edge_cur : ndarray, shape (G_cur, 3, n_channels)
+    edge_cur : ndarray, shape (..., G_cur, 3, n_channels)
         The same for each current animeme at t = 0.
-    dur_prev, dur_cur : float
+    dur_prev, dur_cur : float or ndarray, shape (...)
         Durations (seconds) of the two segments.
     tau : float
         Time scale (seconds) that makes the derivatives dimensionless.
@@ -119,12 +119,15 @@ def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev: floa
 
     Returns
     -------
-    ndarray, shape (G_prev, G_cur)
+    ndarray, shape (..., G_prev, G_cur)
+        The leading axes (many joints at once) broadcast.
     """
-    k = np.arange(edge_prev.shape[1])[:, None]
-    p = edge_prev * (tau / dur_prev) ** k / scale
-    c = edge_cur * (tau / dur_cur) ** k / scale
-    return ((p[:, None] - c[None, :]) ** 2).sum(axis=(2, 3))
+    k = np.arange(edge_prev.shape[-2])[:, None]
+    dp = np.asarray(dur_prev, dtype=float)[..., None, None, None]
+    dc = np.asarray(dur_cur, dtype=float)[..., None, None, None]
+    p = edge_prev * (tau / dp) ** k / scale
+    c = edge_cur * (tau / dc) ** k / scale
+    return ((p[..., :, None, :, :] - c[..., None, :, :, :]) ** 2).sum(axis=(-2, -1))
 
 
 def path_cost(path, node_costs, edge_costs) -> float:
@@ -135,14 +138,35 @@ def path_cost(path, node_costs, edge_costs) -> float:
     return total
 
 
+def pad_layers(node_costs, edge_costs):
+    """Layers of different sizes as rectangular arrays (missing nodes cost +inf).
+
+    Returns
+    -------
+    nodes : ndarray, shape (n_layers, G_max)
+    edges : ndarray, shape (n_layers - 1, G_max, G_max)
+    """
+    J = len(node_costs)
+    G = max(len(n) for n in node_costs)
+    nodes = np.full((J, G), np.inf)
+    edges = np.full((max(J - 1, 0), G, G), np.inf)
+    for j, n in enumerate(node_costs):
+        nodes[j, :len(n)] = n
+    for j, e in enumerate(edge_costs):
+        e = np.asarray(e, dtype=float)
+        edges[j, :e.shape[0], :e.shape[1]] = e
+    return nodes, edges
+
+
 def astar(node_costs, edge_costs):
     """Cheapest path through a layered graph by A*.
 
     Parameters
     ----------
-    node_costs : list of ndarray, layer j has shape (G_j,)
-        Non-negative weighted data costs ``w_c E_c``.
-    edge_costs : list of ndarray, entry j-1 has shape (G_{j-1}, G_j)
+    node_costs : list of ndarray (layer j has shape (G_j,)), or ndarray (n_layers, G_max)
+        Non-negative weighted data costs ``w_c E_c``; in the rectangular form
+        a missing node costs +inf (see :func:`pad_layers`).
+    edge_costs : list of ndarray (entry j-1 has shape (G_{j-1}, G_j)), or ndarray (n_layers - 1, G_max, G_max)
         Non-negative weighted smoothness costs ``w_s E_s``.
 
     Returns
@@ -150,20 +174,28 @@ def astar(node_costs, edge_costs):
     path : list of int, length n_layers
     cost : float
     """
-    J = len(node_costs)
+    if isinstance(node_costs, np.ndarray) and node_costs.ndim == 2:
+        nodes_a, edges_a = node_costs, np.asarray(edge_costs)
+    else:
+        if len(node_costs) == 0:
+            return [], 0.0
+        nodes_a, edges_a = pad_layers(node_costs, edge_costs)
+    J = nodes_a.shape[0]
     if J == 0:
         return [], 0.0
-    mins = np.array([float(np.min(n)) for n in node_costs])
+    mins = nodes_a.min(axis=1)
     # h[j]: cheapest possible remaining node costs after layer j (admissible, consistent)
-    h = np.concatenate([np.cumsum(mins[::-1])[::-1][1:], [0.0]])
+    h = np.concatenate([np.cumsum(mins[::-1])[::-1][1:], [0.0]]).tolist()
+    nodes, edges = nodes_a.tolist(), edges_a.tolist()   # plain floats: fast in the loop
+    inf = float("inf")
     best = {}
     parent = {}
     tie = itertools.count()
     heap = []
-    for g, c in enumerate(node_costs[0]):
-        c = float(c)
-        best[(0, g)] = c
-        heapq.heappush(heap, (c + h[0], next(tie), 0, g, c))
+    for g, c in enumerate(nodes[0]):
+        if c < inf:
+            best[(0, g)] = c
+            heapq.heappush(heap, (c + h[0], next(tie), 0, g, c))
     closed = set()
     while heap:
         _, _, j, g, cost = heapq.heappop(heap)
@@ -177,14 +209,16 @@ def astar(node_costs, edge_costs):
                 j -= 1
                 path.append(g)
             return path[::-1], cost
-        nxt, edges = node_costs[j + 1], edge_costs[j][g]
-        for g2 in range(len(nxt)):
-            c2 = cost + float(edges[g2]) + float(nxt[g2])
+        nxt, row, hj = nodes[j + 1], edges[j][g], h[j + 1]
+        for g2, n2 in enumerate(nxt):
+            c2 = cost + row[g2] + n2
+            if c2 == inf:
+                continue
             key = (j + 1, g2)
-            if key not in closed and c2 < best.get(key, np.inf):
+            if key not in closed and c2 < best.get(key, inf):
                 best[key] = c2
                 parent[key] = g
-                heapq.heappush(heap, (c2 + h[j + 1], next(tie), j + 1, g2, c2))
+                heapq.heappush(heap, (c2 + hj, next(tie), j + 1, g2, c2))
     raise RuntimeError("A* found no path (empty layer?)")  # pragma: no cover
 
 

@@ -19,7 +19,12 @@ import sys
 from . import __version__
 
 # "module:function" adders of subcommands that live beside their code.
-_EXTERNAL: list[str] = []
+_EXTERNAL: list[str] = [
+    "dam.cli_rig:add_crossmap", "dam.cli_rig:add_retarget", "dam.cli_rig:add_rigsolve",
+    "dam.datasets.vtl:add_generate_vtl",
+    "dam.compare:add_compare",
+    "dam.model:add_inspect",
+]
 
 
 def _corpus(spec):

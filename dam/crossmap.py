@@ -42,7 +42,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .data import DataError
-from .rig import LinearRig, check_bounds, check_frames, map_trajectories, stack_frames
+from .rig import LinearRig, as_rig, check_bounds, check_frames, map_trajectories, stack_frames
 
 __all__ = ["find_key_shapes", "blend_weights", "blend_vertices", "fit_controls", "CrossMapper"]
 
@@ -131,13 +131,15 @@ def blend_weights(frames, key_shapes) -> np.ndarray:
     weights : ndarray, shape (n_frames, n_key_shapes)
     """
     from scipy.optimize import nnls
+    from threadpoolctl import threadpool_limits
 
     L = check_frames(key_shapes, "key_shapes")
     X = check_frames(frames, "frames", n_dims=L.shape[1], dims_name="the key shapes' n_dims")
     A = L.T
     out = np.empty((len(X), len(L)))
-    for i, x in enumerate(X):
-        out[i] = nnls(A, x)[0]
+    with threadpool_limits(1, user_api="blas"):  # many tiny solves: BLAS threads only contend
+        for i, x in enumerate(X):
+            out[i] = nnls(A, x)[0]
     return out
 
 
@@ -157,18 +159,6 @@ def blend_vertices(weights, target_key_shapes) -> np.ndarray:
     V = check_frames(target_key_shapes, "target_key_shapes")
     W = check_frames(weights, "weights", n_dims=len(V), dims_name="the number of target key shapes")
     return W @ V
-
-
-def _as_rig(rig, n_controls=None):
-    """(linear: LinearRig or None, function or None, n_controls)."""
-    if isinstance(rig, LinearRig):
-        return rig, None, rig.n_controls
-    if callable(rig):
-        if n_controls is None:
-            raise DataError(None, "n_controls", None, "a rig given as a function needs n_controls")
-        return None, rig, int(n_controls)
-    deltas = check_frames(rig, "rig")  # a bare matrix: the paper's sum_k V(C_k), no neutral
-    return LinearRig(np.zeros(deltas.shape[1]), deltas), None, deltas.shape[0]
 
 
 def fit_controls(vertices, rig, *, bounds=(0.0, 1.0), n_controls: int | None = None, x0=None,
@@ -206,15 +196,22 @@ def fit_controls(vertices, rig, *, bounds=(0.0, 1.0), n_controls: int | None = N
     controls : ndarray, shape (n_frames, n_controls)
         Every value within ``bounds``.
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):  # many tiny solves: BLAS threads only contend
+        return _fit_controls(vertices, rig, bounds, n_controls, x0, jacobian, max_nfev)
+
+
+def _fit_controls(vertices, rig, bounds, n_controls, x0, jacobian, max_nfev):
     from scipy.optimize import least_squares, lsq_linear
 
-    linear, func, n = _as_rig(rig, n_controls)
+    linear, func, n = as_rig(rig, n_controls)
     lo, hi = check_bounds(bounds, n)
     if linear is not None:
         V = check_frames(vertices, "vertices", n_dims=linear.n_dims, dims_name="the rig's n_dims")
         if linear.n_dims < n:
             warnings.warn(f"the rig has {n} controls but only {linear.n_dims} vertex coordinates; "
-                          "the controls are not unique (Appendix A asks for |V| >= |C|)", stacklevel=2)
+                          "the controls are not unique (Appendix A asks for |V| >= |C|)", stacklevel=3)
         A = linear.deltas.T
         B = V - linear.neutral
         # Frames whose unbounded least-squares solution is feasible need no BVLS.
@@ -366,7 +363,7 @@ class CrossMapper(BaseEstimator, TransformerMixin):
         if len(V) != len(self.key_shapes_):
             raise DataError(None, "target_key_shapes", V.shape,
                             f"needs one row per key shape ({len(self.key_shapes_)})")
-        _, _, n = _as_rig(self.rig, self.n_controls)
+        _, _, n = as_rig(self.rig, self.n_controls)
 
         def fn(F):
             verts = blend_vertices(blend_weights(F, self.key_shapes_), V)

@@ -18,10 +18,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .estep import Occurrences, design_matrix, pairs, solve_normal_equations
+from .estep import Occurrences, fitted_values, normal_equations, pairs, solve_normal_equations
 from .mstep import gauss_newton_sigma
 
-__all__ = ["ConvergenceMonitor", "ridge_lambda", "fit_em"]
+__all__ = ["ConvergenceMonitor", "ridge_lambda", "fit_em", "SIGMA_GRID"]
+
+# Starting sigmas tried by sigma_init="auto" (the paper's 1.0 among them): the
+# objective is not convex in sigma and a start above the truth can stall in a
+# local minimum where the polynomial tails compensate.
+SIGMA_GRID = (0.15, 0.3, 0.5, 0.75, 1.0, 1.5)
 
 
 @dataclass
@@ -56,23 +61,34 @@ class ConvergenceMonitor:
         return self.converged or self.iter >= self.max_iter
 
 
-def ridge_lambda(X, ridge: float) -> float:
-    """The ridge as a fraction of the mean diagonal of ``X^T X`` (scale-free)."""
-    sq = X.multiply(X).sum(axis=0)
-    return float(ridge * max(np.mean(sq), 1e-300))
+def ridge_lambda(n_rows: int, ridge: float) -> float:
+    """``lambda = ridge * n_rows``: per frame the objective is MSE + ridge ||a||^2.
+
+    (Relative to the diagonal of ``X^T X`` would be scale-free too, but with
+    polynomial extrapolation the high-order columns are huge in the dominance
+    tails and such a ridge would swamp the low-order coefficients.)
+    """
+    return float(ridge * n_rows)
 
 
-def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init: float = 1.0, ridge: float = 1e-6,
+def fitted_values_all(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, pr) -> np.ndarray:
+    """Eq. (2) on the training rows for every channel sharing ``sigma``, shape (n_rows, n_channels)."""
+    return np.stack([fitted_values(occ, coef[:, :, c], sigma, pr)[0] for c in range(coef.shape[2])], axis=1)
+
+
+def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float = 1e-6,
            tol: float = 1e-4, max_iter: int = 50, gn_steps: int = 5, verbose: int = 0,
-           fixed_sigma: bool = False):
+           fixed_sigma: bool = False, projected: bool = True):
     """Fit every channel's animeme coefficients and sigmas.
 
     Parameters
     ----------
     occ : Occurrences
     Y : ndarray, shape (n_rows, n_channels)
-    sigma_init : float, default 1.0
-        Starting sigma of every mode (the paper uses 1).
+    sigma_init : float or "auto", default "auto"
+        Starting sigma of every mode (the paper uses 1), or "auto": per
+        channel, the best common start of ``SIGMA_GRID`` by the first E-step's
+        objective.
     ridge : float, default 1e-6
         See :func:`ridge_lambda`.
     tol, max_iter : float, int
@@ -83,6 +99,9 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init: float = 1.0, ridge: f
         > 0 shows a progress bar over channels on stderr (when it is a TTY).
     fixed_sigma : bool, default False
         Only the first E-step (for tests and ablations).
+    projected : bool, default True
+        M-step by variable projection (True) or with the coefficients frozen
+        as in the paper (False); see :func:`dam.mstep.gauss_newton_sigma`.
 
     Returns
     -------
@@ -97,15 +116,30 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init: float = 1.0, ridge: f
     Y = np.asarray(Y, dtype=float)
     n_ch = Y.shape[1]
     M1 = occ.degree + 1
-    sigma0 = np.full(occ.n_modes, float(sigma_init))
-    # First E-step: every channel has the same sigmas, so one solve serves all.
-    pr0 = pairs(occ, sigma0)
-    X0 = design_matrix(occ, sigma0, pr0)
-    lam = ridge_lambda(X0, ridge)
-    A0 = solve_normal_equations(X0, Y, lam).reshape(occ.n_modes, M1, n_ch)
-    R0 = Y - X0 @ A0.reshape(-1, n_ch)
+    # First E-step: every channel starts with all sigmas equal, so one solve per
+    # candidate start serves all channels; "auto" keeps each channel's best.
+    starts = SIGMA_GRID if isinstance(sigma_init, str) else (float(sigma_init),)
+    if isinstance(sigma_init, str) and sigma_init != "auto":
+        raise ValueError(f"parameter 'sigma_init' is {sigma_init!r}; use a number > 0 or 'auto'")
+    lam = None
+    best = np.full(n_ch, np.inf)
+    A0 = np.zeros((occ.n_modes, M1, n_ch))
+    S0 = np.zeros(n_ch)
+    for s0 in starts:
+        sig = np.full(occ.n_modes, s0)
+        pr = pairs(occ, sig)
+        G, XtY = normal_equations(occ, sig, Y, pr)
+        if lam is None:  # fixed for the whole fit, so every step minimises one objective
+            lam = ridge_lambda(occ.n_rows, ridge)
+        A, _ = solve_normal_equations(G, XtY, lam)
+        R = Y - fitted_values_all(occ, A.reshape(occ.n_modes, M1, n_ch), sig, pr)
+        obj = (np.sum(R ** 2, axis=0) + lam * np.sum(A * A, axis=0)) / occ.n_rows
+        better = obj < best
+        best[better] = obj[better]
+        A0[:, :, better] = A.reshape(occ.n_modes, M1, n_ch)[:, :, better]
+        S0[better] = s0
     coef = A0.copy()
-    sigma = np.repeat(sigma0[:, None], n_ch, axis=1)
+    sigma = np.repeat(S0[None, :], occ.n_modes, axis=0)
     curves, n_iter, converged = [], np.zeros(n_ch, dtype=int), np.zeros(n_ch, dtype=bool)
 
     from tqdm.auto import tqdm
@@ -114,15 +148,18 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init: float = 1.0, ridge: f
     for c in bar:
         y = Y[:, c]
         a = A0[:, :, c]
-        s = sigma0.copy()
+        s = sigma[:, c].copy()
         mon = ConvergenceMonitor(tol, max_iter)
-        mon.report((np.sum(R0[:, c] ** 2) + lam * np.sum(a * a)) / occ.n_rows)
+        mon.report(best[c])
         while not fixed_sigma and not mon.done:
-            s, _ = gauss_newton_sigma(occ, y, a, s, n_steps=gn_steps)
-            X = design_matrix(occ, s)
-            a = solve_normal_equations(X, y, lam).reshape(occ.n_modes, M1)
+            s, a, obj = gauss_newton_sigma(occ, y, a, s, lam=lam, projected=projected, n_steps=gn_steps)
+            if not projected:  # the E-step (the projected M-step re-solves a itself)
+                pr = pairs(occ, s)
+                G, Xty = normal_equations(occ, s, y, pr)
+                a = solve_normal_equations(G, Xty, lam)[0].reshape(occ.n_modes, M1)
+                obj = float(np.sum((y - fitted_values(occ, a, s, pr)[0]) ** 2) + lam * np.sum(a * a))
             mon.iter += 1
-            mon.report((np.sum((y - X @ a.ravel()) ** 2) + lam * np.sum(a * a)) / occ.n_rows)
+            mon.report(obj / occ.n_rows)
         coef[:, :, c] = a
         sigma[:, c] = s
         curves.append(np.array(mon.history))

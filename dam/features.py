@@ -53,7 +53,8 @@ from .data import SILENCE, Alignment, DataError
 
 __all__ = [
     "phone_vocabulary", "frame_phone_indices", "window_features", "window_targets", "overlap_average",
-    "window_offsets", "n_window_features", "window_feature_names", "phonetic_transition_clusters", "fit_transition_clusters",
+    "window_offsets", "n_window_features", "window_feature_names", "phonetic_transition_clusters",
+    "fit_transition_clusters",
 ]
 
 _ALIGNS = ("center", "causal")
@@ -111,28 +112,34 @@ def frame_phone_indices(alignment: Alignment, frame_rate: float, n_frames: int,
     return rows[alignment.segment_index(frame_rate, n_frames)]
 
 
-def window_offsets(k: int, align: str = "center") -> np.ndarray:
-    """Frame offsets of a window of ``k`` frames relative to its frame, shape (k,)."""
+def window_offsets(k: int, align: str = "center", dilation: int = 1) -> np.ndarray:
+    """Frame offsets of a window of ``k`` frames relative to its frame, shape (k,).
+
+    With ``dilation > 1`` the window frames are ``dilation`` frames apart (a
+    window of the same number of frames spanning more time).
+    """
+    if int(dilation) != dilation or dilation < 1:
+        raise ValueError(f"dilation must be a positive integer, got {dilation!r}")
     if align not in _ALIGNS:
         raise ValueError(f"align is {align!r}; use one of {_ALIGNS}")
     if int(k) != k or k < 1:
         raise ValueError(f"window length must be a positive integer, got {k!r}")
     k = int(k)
     start = -(k // 2) if align == "center" else -(k - 1)
-    return np.arange(start, start + k)
+    return np.arange(start, start + k) * int(dilation)
 
 
-def _windows(idx: np.ndarray, kx: int, align: str, pad: int) -> np.ndarray:
+def _windows(idx: np.ndarray, kx: int, align: str, pad: int, dilation: int = 1) -> np.ndarray:
     """(n, kx) phone indices of every input window; ``pad`` outside the utterance."""
     n = len(idx)
-    pos = np.arange(n)[:, None] + window_offsets(kx, align)[None, :]
+    pos = np.arange(n)[:, None] + window_offsets(kx, align, dilation)[None, :]
     inside = (pos >= 0) & (pos < n)
     return np.where(inside, idx[np.clip(pos, 0, max(n - 1, 0))], pad)
 
 
 def window_features(alignment: Alignment, frame_rate: float, n_frames: int, vocabulary: list[str], *,
                     kx: int = 11, features: str = "raw", align: str = "center", alphabet: str | None = None,
-                    transition_clusters: dict | None = None) -> np.ndarray:
+                    transition_clusters: dict | None = None, dilation: int = 1) -> np.ndarray:
     """Indicator features of the ``kx``-frame input window of every frame.
 
     Parameters
@@ -152,6 +159,8 @@ def window_features(alignment: Alignment, frame_rate: float, n_frames: int, voca
         ``{"CV": (V, V) int, "VC": ..., "CC": ...}`` cluster of every phone
         pair (-1: none), from :func:`fit_transition_clusters`; phonetic
         approximation (:func:`phonetic_transition_clusters`) by default.
+    dilation : int, default 1
+        Window frames are ``dilation`` frames apart (:func:`window_offsets`).
 
     Returns
     -------
@@ -164,7 +173,7 @@ def window_features(alignment: Alignment, frame_rate: float, n_frames: int, voca
         raise ValueError(f"the vocabulary lacks the silence label {alignment.silence!r} used for padding")
     V = len(vocabulary)
     W = _windows(frame_phone_indices(alignment, frame_rate, n_frames, vocabulary), kx, align,
-                 vocabulary.index(alignment.silence))
+                 vocabulary.index(alignment.silence), dilation)
     onehot = np.zeros((len(W), kx, V), dtype=np.float32)
     np.put_along_axis(onehot, W[:, :, None], 1.0, axis=2)
     if features == "raw":
@@ -326,7 +335,7 @@ def _linguistic(W, onehot, vocabulary, alphabet, clusters, silence) -> np.ndarra
     return np.concatenate([b.astype(np.float32, copy=False) for b in blocks], axis=1)
 
 
-def window_targets(trajectory, *, ky: int = 5, align: str = "center") -> np.ndarray:
+def window_targets(trajectory, *, ky: int = 5, align: str = "center", dilation: int = 1) -> np.ndarray:
     """The ``ky``-frame output window of every frame, flattened.
 
     Parameters
@@ -334,11 +343,12 @@ def window_targets(trajectory, *, ky: int = 5, align: str = "center") -> np.ndar
     trajectory : array-like, shape (n_frames, n_channels)
     ky : int, default 5
     align : {"center", "causal"}, default "center"
+    dilation : int, default 1
 
     Returns
     -------
     ndarray, shape (n_frames, ky * n_channels)
-        Row ``i`` holds frames ``i + window_offsets(ky, align)`` in order,
+        Row ``i`` holds frames ``i + window_offsets(ky, align, dilation)`` in order,
         channels fastest (entry ``j * n_channels + c``); frames beyond the
         utterance repeat its first/last frame.
     """
@@ -346,11 +356,12 @@ def window_targets(trajectory, *, ky: int = 5, align: str = "center") -> np.ndar
     if Y.ndim == 1:
         Y = Y[:, None]
     n = len(Y)
-    pos = np.clip(np.arange(n)[:, None] + window_offsets(ky, align)[None, :], 0, n - 1)
+    pos = np.clip(np.arange(n)[:, None] + window_offsets(ky, align, dilation)[None, :], 0, n - 1)
     return Y[pos].reshape(n, -1)
 
 
-def overlap_average(window_predictions, ky: int, n_channels: int, align: str = "center") -> np.ndarray:
+def overlap_average(window_predictions, ky: int, n_channels: int, align: str = "center",
+                    dilation: int = 1) -> np.ndarray:
     """Blend overlapping output windows by the frame-wise mean (Taylor et al., Fig. 4e).
 
     Parameters
@@ -361,6 +372,7 @@ def overlap_average(window_predictions, ky: int, n_channels: int, align: str = "
     ky : int
     n_channels : int
     align : {"center", "causal"}, default "center"
+    dilation : int, default 1
 
     Returns
     -------
@@ -375,7 +387,7 @@ def overlap_average(window_predictions, ky: int, n_channels: int, align: str = "
     P = P.reshape(n, ky, n_channels)
     total = np.zeros((n, n_channels))
     count = np.zeros(n)
-    for j, off in enumerate(window_offsets(ky, align)):
+    for j, off in enumerate(window_offsets(ky, align, dilation)):
         lo, hi = max(0, -off), min(n, n - off)  # windows i whose entry j lands inside [0, n)
         if lo < hi:
             total[lo + off:hi + off] += P[lo:hi, j]

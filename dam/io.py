@@ -9,8 +9,9 @@ A corpus directory holds
   ``.lab`` file (``start end label`` per line, times in 100 ns units);
 * with the same file stem, a trajectory: ``.csv`` with a header row of channel
   names and an optional leading ``time`` column in seconds (which then fixes
-  the frame rate), or ``.npy`` of shape (n_frames, n_channels); other readers
-  can be added to :data:`TRAJECTORY_READERS`;
+  the frame rate), ``.npy`` of shape (n_frames, n_channels), or an EST track
+  (``.ema``, ``.est``, ``.trk``; mngu0/MOCHA-TIMIT EMA, see :mod:`dam.est`);
+  other readers can be added to :data:`TRAJECTORY_READERS`;
 * optionally ``<stem>.wav``, the utterance's audio.
 
 Every error names the file, the field and the value.
@@ -126,19 +127,30 @@ def _read_csv(path: str) -> tuple[np.ndarray, list[str], float | None]:
     frame_rate = None
     if names and names[0].lower() == "time":
         t, data, names = data[:, 0], data[:, 1:], names[1:]
-        if len(t) >= 2:
-            step = np.diff(t)
-            dt = float(np.median(step))
-            if not dt > 0 or np.max(np.abs(step - dt)) > 0.01 * dt:
-                k = int(np.argmax(np.abs(step - dt)))
-                raise DataError(path, f"time (row {k + 2})", float(t[k + 1]),
-                                f"the time column is not evenly spaced (median step {dt:g} s)")
-            frame_rate = 1.0 / dt
-            if abs(t[0]) > 0.5 * dt:
-                raise DataError(path, "time (row 1)", float(t[0]),
-                                "the first frame must be at time 0 (frame i is at i / frame_rate)",
-                                "pad the trajectory to start at 0 or shift the alignment")
+        frame_rate = frame_rate_from_times(t, path, where="time (row {})")
     return data, names, frame_rate
+
+
+def frame_rate_from_times(times, source, *, where: str = "time (frame {})", first: int = 1) -> float | None:
+    """Frames per second of evenly spaced frame times that start at 0; None for < 2 frames.
+
+    ``where`` formats the field of an error with the 1-based index of the
+    offending frame (counted from ``first``).
+    """
+    t = np.asarray(times, dtype=float)
+    if len(t) < 2:
+        return None
+    step = np.diff(t)
+    dt = float(np.median(step))
+    if not dt > 0 or np.max(np.abs(step - dt)) > 0.01 * dt:
+        k = int(np.argmax(np.abs(step - dt)))
+        raise DataError(source, where.format(k + 1 + first), float(t[k + 1]),
+                        f"the frame times are not evenly spaced (median step {dt:g} s)")
+    if abs(t[0]) > 0.5 * dt:
+        raise DataError(source, where.format(first), float(t[0]),
+                        "the first frame must be at time 0 (frame i is at i / frame_rate)",
+                        "pad the trajectory to start at 0 or shift the alignment")
+    return 1.0 / dt
 
 
 def _read_npy(path: str) -> tuple[np.ndarray, list[str] | None, float | None]:
@@ -153,8 +165,14 @@ def _read_npy(path: str) -> tuple[np.ndarray, list[str] | None, float | None]:
     return data, None, None
 
 
+def _read_est(path: str) -> tuple[np.ndarray, list[str] | None, float | None]:
+    from .est import read_est_trajectory  # EST tracks (mngu0, MOCHA-TIMIT EMA)
+    return read_est_trajectory(path)
+
+
 #: suffix -> reader(path) returning (data, channel names or None, frame rate or None)
-TRAJECTORY_READERS: dict[str, Callable] = {".csv": _read_csv, ".npy": _read_npy}
+TRAJECTORY_READERS: dict[str, Callable] = {".csv": _read_csv, ".npy": _read_npy,
+                                           ".ema": _read_est, ".est": _read_est, ".trk": _read_est}
 
 
 def read_trajectory(path) -> tuple[np.ndarray, list[str] | None, float | None]:

@@ -41,7 +41,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .data import DataError
-from .rig import LinearRig, check_bounds, check_frames, map_trajectories, stack_frames
+from .rig import LinearRig, as_rig, check_bounds, check_frames, map_trajectories, stack_frames
 
 __all__ = ["similarity_transform", "landmark_targets", "tied_parameters", "solve_landmarks", "LandmarkSolver"]
 
@@ -170,7 +170,7 @@ def _to_vars(theta, M, lower, upper):
 
 def solve_landmarks(targets, rig, *, alpha: float = 0.01, bounds=(0.0, 1.0), n_params: int | None = None,
                     jacobian: Callable | None = None, symmetric_pairs=None, x0=None,
-                    max_iter: int = 500, tol: float = 1e-12, return_info: bool = False):
+                    max_iter: int = 500, tol: float = 1e-12, n_restarts: int = 5, return_info: bool = False):
     """Rig parameters of every frame from landmark targets (Eqs. 2-4), L-BFGS-B, warm-started.
 
     Parameters
@@ -196,7 +196,11 @@ def solve_landmarks(targets, rig, *, alpha: float = 0.01, bounds=(0.0, 1.0), n_p
     max_iter : int, default 500
         L-BFGS-B iterations per frame.
     tol : float, default 1e-12
-        L-BFGS-B ``ftol`` (relative reduction) and ``gtol``.
+        L-BFGS-B ``ftol`` (relative reduction); ``gtol`` is ``100 * tol``.
+    n_restarts : int, default 5
+        With an exact gradient, restart L-BFGS-B (at most this often) while the
+        projected gradient is not yet zero: on a degenerate problem (more
+        parameters than landmark coordinates) it can stall on ``ftol``.
     return_info : bool, default False
         Also return a dict with per-frame ``energy``, ``pose_error``
         (Eq. 2) and ``n_iter``.
@@ -207,26 +211,19 @@ def solve_landmarks(targets, rig, *, alpha: float = 0.01, bounds=(0.0, 1.0), n_p
     info : dict, only if ``return_info``
     """
     from scipy.optimize import minimize
+    from threadpoolctl import threadpool_limits
 
     if not (np.isfinite(alpha) and alpha >= 0):
         raise DataError(None, "alpha", alpha, "must be a non-negative number")
-    if isinstance(rig, LinearRig) or not callable(rig):
-        lin = rig if isinstance(rig, LinearRig) else LinearRig(np.zeros(np.shape(rig)[-1]), check_frames(rig, "rig"))
-        n = lin.n_controls
-        func, jac_fn = lin, (lambda th: lin.deltas.T)
-    else:
-        if n_params is None:
-            raise DataError(None, "n_params", None, "a rig given as a function needs n_params")
-        n, func, lin = int(n_params), rig, None
-        jac_fn = None if jacobian is None else (lambda th: np.asarray(jacobian(th), dtype=float))
+    lin, func, n = as_rig(rig, n_params, count_name="n_params")
+    jac_fn = None if (lin is not None or jacobian is None) else (lambda th: np.asarray(jacobian(th), dtype=float))
     M, zlo, zhi, cost = tied_parameters(n, bounds, symmetric_pairs)
     plo, phi = check_bounds(bounds, n)
     theta = np.clip(np.zeros(n) if x0 is None else check_frames(x0, "x0", n_dims=n)[0], plo, phi)
     first = np.asarray(func(theta), dtype=float).ravel()
     Y = check_frames(targets, "targets", n_dims=len(first), dims_name="the rig's landmark coordinates")
-    if lin is not None:  # quadratic: precompute the normal equations in z
+    if lin is not None:  # linear landmarks: C(M z) = neutral + A z
         A = lin.deltas.T @ M
-        H = A.T @ A
 
     def energy(z, y):
         th = M @ z
@@ -240,19 +237,35 @@ def solve_landmarks(targets, rig, *, alpha: float = 0.01, bounds=(0.0, 1.0), n_p
         return e, 2 * M.T @ (jac_fn(th).T @ r) + alpha * cost
 
     use_jac = lin is not None or jac_fn is not None
+    box = list(zip(zlo, zhi))
+    opts = {"maxiter": max_iter, "ftol": tol, "gtol": tol * 1e2, "maxcor": 20}
+
+    def _solve_frame(z, y):
+        nit = 0
+        for _ in range(1 + max(int(n_restarts), 0)):
+            res = minimize(energy, z, args=(y,), jac=use_jac, method="L-BFGS-B", bounds=box, options=opts)
+            z, nit = np.clip(res.x, zlo, zhi), nit + res.nit
+            # L-BFGS-B can stop on "relative reduction" far from the optimum of a degenerate
+            # problem (more parameters than landmarks); a restart drops its stale curvature pairs.
+            if not use_jac or res.nit == 0:
+                break
+            g = energy(z, y)[1]
+            if np.max(np.abs(z - np.clip(z - g, zlo, zhi))) <= 1e-8 * max(1.0, np.max(np.abs(g))):
+                break
+        return z, M @ z, nit
+
     out = np.empty((len(Y), n))
     info = {"energy": np.empty(len(Y)), "pose_error": np.empty(len(Y)), "n_iter": np.empty(len(Y), int)}
     z = _to_vars(theta, M, zlo, zhi)
-    for t, y in enumerate(Y):
-        res = minimize(energy, z, args=(y,), jac=use_jac, method="L-BFGS-B", bounds=list(zip(zlo, zhi)),
-                       options={"maxiter": max_iter, "ftol": tol, "gtol": tol * 1e2, "maxcor": 20})
-        z = np.clip(res.x, zlo, zhi)
-        out[t] = M @ z
-        if return_info:
-            r = np.asarray(func(out[t]), dtype=float).ravel() - y
-            info["pose_error"][t] = r @ r
-            info["energy"][t] = r @ r + alpha * np.abs(out[t]).sum()
-            info["n_iter"][t] = res.nit
+    # Thousands of tiny solves: OpenBLAS threads only add contention (20x slower on a busy machine).
+    with threadpool_limits(1, user_api="blas"):
+        for t, y in enumerate(Y):
+            z, out[t], nit = _solve_frame(z, y)
+            if return_info:
+                r = np.asarray(func(out[t]), dtype=float).ravel() - y
+                info["pose_error"][t] = r @ r
+                info["energy"][t] = r @ r + alpha * np.abs(out[t]).sum()
+                info["n_iter"][t] = nit
     if not np.all(np.isfinite(out)):
         raise DataError(None, "targets", "non-finite parameters", "the rig function returned non-finite values")
     out = np.clip(out, plo, phi)
@@ -308,21 +321,10 @@ class LandmarkSolver(BaseEstimator, TransformerMixin):
         self.tol = tol
 
     def _n(self):
-        if isinstance(self.rig, LinearRig):
-            return self.rig.n_controls
-        if self.rig is None:
-            raise DataError(None, "rig", None, "no rig given")
-        if not callable(self.rig):
-            return np.shape(self.rig)[0]
-        if self.n_params is None:
-            raise DataError(None, "n_params", None, "a rig given as a function needs n_params")
-        return int(self.n_params)
+        return as_rig(self.rig, self.n_params, count_name="n_params")[2]
 
     def _rig_fn(self):
-        if isinstance(self.rig, LinearRig) or callable(self.rig):
-            return self.rig
-        D = check_frames(self.rig, "rig")
-        return LinearRig(np.zeros(D.shape[1]), D)
+        return as_rig(self.rig, self.n_params, count_name="n_params")[1]
 
     def fit(self, X=None, y=None) -> "LandmarkSolver":
         """Fit the neutral alignment on captured neutral-pose frames (their mean), or none if X is None."""

@@ -39,20 +39,28 @@ class DAM(Synthesizer):
         Modes per phone by affinity propagation, or one mode per phone.
     n_resample : int, default 20
         K: points on [0, 1] each occurrence is resampled to for clustering.
-    mode_preference : "median", "min" or float, default "median"
+    mode_preference : "median", "min" or float, default "min"
         Affinity propagation preference (lower: fewer modes); see
-        :func:`dam.modes.cluster_modes`.
-    min_occurrences : int, default 6
+        :func:`dam.modes.cluster_modes`. scikit-learn's "median" finds many
+        small modes that do not generalise to held-out data.
+    min_occurrences : int, default 10
         Phones with fewer training occurrences get one mode.
-    min_mode_size : int, default 3
+    min_mode_size : int, default 5
         Smaller clusters are merged into the nearest mode.
     ridge : float, default 1e-6
-        Ridge on the (shifted-Legendre) coefficients, as a fraction of the
-        mean diagonal of ``X^T X``; keeps rare modes identifiable.
+        Ridge on the (shifted-Legendre) coefficients: the objective per frame
+        is the mean squared error plus ``ridge * ||a||^2``; keeps rare modes
+        identifiable.
     eps : float, default 1e-8
         The epsilon of Eq. (1).
-    sigma_init : float, default 1.0
-        Starting sigma of every mode (the paper: 1).
+    sigma_init : float or "auto", default "auto"
+        Starting sigma of every mode: a number (the paper: 1.0), or "auto":
+        per channel the best common start among :data:`dam.em.SIGMA_GRID`
+        (1.0 included) by the first E-step's error. With
+        ``extrapolate="polynomial"`` the objective has local minima (the
+        polynomial tails can stand in for the dominance) and from 1.0 the EM
+        stalls in some of them on data generated with known parameters;
+        with ``"hold"`` the start hardly matters.
     tol : float, default 1e-4
         EM stops when the objective improves by less than this fraction.
     max_iter : int, default 30
@@ -107,9 +115,9 @@ class DAM(Synthesizer):
     _tags = {"deterministic": True}
 
     def __init__(self, *, degree: int = 4, normalize: bool = False, extrapolate: str = "polynomial",
-                 modes: str = "affinity", n_resample: int = 20, mode_preference="median",
-                 min_occurrences: int = 6, min_mode_size: int = 3, ridge: float = 1e-6,
-                 eps: float = 1e-8, sigma_init: float = 1.0, tol: float = 1e-4, max_iter: int = 30,
+                 modes: str = "affinity", n_resample: int = 20, mode_preference="min",
+                 min_occurrences: int = 10, min_mode_size: int = 5, ridge: float = 1e-6,
+                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-4, max_iter: int = 30,
                  gn_steps: int = 3, w_c: float = 1000.0, w_s: float = 1.0,
                  context_smoothing: float = 0.5, dominance_tol: float = 1e-4,
                  unknown_phone: str = "error", random_state=0, verbose: int = 0):
@@ -159,13 +167,23 @@ class DAM(Synthesizer):
                 bad(name, "use a finite number >= 0")
         if not (0.0 <= self.dominance_tol < 1.0):
             bad("dominance_tol", "use a number in [0, 1)")
-        if not (self.sigma_init > 0):
-            bad("sigma_init", "use a number > 0")
+        if not (self.sigma_init == "auto" or (np.isscalar(self.sigma_init)
+                                               and not isinstance(self.sigma_init, str) and self.sigma_init > 0)):
+            bad("sigma_init", "use a number > 0 or 'auto'")
         if not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 0:
             bad("max_iter", "use an integer >= 0")
 
     # -- training ----------------------------------------------------------
     def _fit(self, corpus: Corpus) -> None:
+        import scipy.linalg  # noqa: F401  (loaded first, so threadpoolctl sees its BLAS)
+        from threadpoolctl import threadpool_limits
+
+        # The linear algebra here is small (hundreds of unknowns); a
+        # multithreaded BLAS on a busy machine makes it hundreds of times slower.
+        with threadpool_limits(limits=1, user_api="blas"):
+            self._fit_em(corpus)
+
+    def _fit_em(self, corpus: Corpus) -> None:
         from .em import fit_em
         from .estep import Occurrences
         from .modes import cluster_modes, resample_occurrences
@@ -300,11 +318,16 @@ class DAM(Synthesizer):
         return cache[1]
 
     def _graph(self, labels, durations):
-        """Node costs ``w_c E_c``, edge costs ``w_s E_s`` and context levels of an alignment."""
+        """Node costs ``w_c E_c`` (n_seg, G_max), edge costs ``w_s E_s`` (n_seg - 1, G_max, G_max)
+        (missing modes +inf, see :func:`dam.astar.pad_layers`) and the back-off level of every ``E_c``."""
         J = len(labels)
         padded = [BOUNDARY, *labels, BOUNDARY]
         nll_cache = self.__dict__.setdefault("_nll_cache", {})
-        nodes, levels = [], []
+        first = np.array([self.phone_modes_[p][0] for p in labels], dtype=int)
+        count = np.array([self.phone_modes_[p][1] for p in labels], dtype=int)
+        G = int(count.max())
+        nodes = np.full((J, G), np.inf)
+        levels = []
         for j, p in enumerate(labels):
             key = (p, padded[j], padded[j + 2], self.context_smoothing)
             hit = nll_cache.get(key)
@@ -312,21 +335,18 @@ class DAM(Synthesizer):
                 hit = mode_nll(self.context_counts_, p, key[1], key[2], self.phone_modes_[p][1],
                                self.context_smoothing)
                 nll_cache[key] = hit
-            nodes.append(self.w_c * hit[0])
+            nodes[j, :len(hit[0])] = self.w_c * hit[0]
             levels.append(hit[1])
+        # every joint at once: modes of each segment padded to G (index of a missing mode
+        # clipped to a real one, its cost set to +inf below)
+        idx = first[:, None] + np.minimum(np.arange(G), count[:, None] - 1)
         edges = self._edges()
-        first = [self.phone_modes_[p][0] for p in labels]
-        count = [self.phone_modes_[p][1] for p in labels]
-        ecosts = []
-        for j in range(1, J):
-            if count[j - 1] == 1 and count[j] == 1 and self.w_s == 0:
-                ecosts.append(np.zeros((1, 1)))
-                continue
-            prev = edges[first[j - 1]:first[j - 1] + count[j - 1], 1]
-            cur = edges[first[j]:first[j] + count[j], 0]
-            ecosts.append(self.w_s * smoothness_costs(prev, cur, durations[j - 1], durations[j],
-                                                      self.time_scale_, self.channel_scale_))
-        return nodes, ecosts, levels
+        ecost = self.w_s * smoothness_costs(edges[idx[:-1], 1], edges[idx[1:], 0], durations[:-1],
+                                            durations[1:], self.time_scale_, self.channel_scale_)
+        missing = np.arange(G) >= count[:, None]
+        ecost[missing[:-1]] = np.inf
+        ecost.transpose(0, 2, 1)[missing[1:]] = np.inf
+        return nodes, ecost, levels
 
     def select_modes(self, alignment: Alignment):
         """Mode of every segment by A* (Section VI).
@@ -466,9 +486,9 @@ class DAMM0(DAM):
     name = "dam-m0"
 
     def __init__(self, *, degree: int = 0, normalize: bool = False, extrapolate: str = "polynomial",
-                 modes: str = "affinity", n_resample: int = 20, mode_preference="median",
-                 min_occurrences: int = 6, min_mode_size: int = 3, ridge: float = 1e-6,
-                 eps: float = 1e-8, sigma_init: float = 1.0, tol: float = 1e-4, max_iter: int = 30,
+                 modes: str = "affinity", n_resample: int = 20, mode_preference="min",
+                 min_occurrences: int = 10, min_mode_size: int = 5, ridge: float = 1e-6,
+                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-4, max_iter: int = 30,
                  gn_steps: int = 3, w_c: float = 1000.0, w_s: float = 1.0,
                  context_smoothing: float = 0.5, dominance_tol: float = 1e-4,
                  unknown_phone: str = "error", random_state=0, verbose: int = 0):
@@ -516,11 +536,12 @@ def inspect_report(model: DAM, *, max_phones: int | None = None) -> str:
                  for g in range(G)]
         lines.append(f"{p:>8} {model.phone_counts_.get(p, 0):>6} {G:>5}  {'  '.join(parts)}")
     if len(ch) and len(model.loss_curve_):
-        lines += ["", f"{'channel':>12} {'iters':>5} {'conv':>5} {'objective first -> last':>26}"]
+        w = max(12, *(len(c) for c in ch))
+        lines += ["", f"{'channel':>{w}} {'iters':>5} {'conv':>5}  EM objective (MSE + ridge) first -> last"]
         for c, name in enumerate(ch):
             cur = model.loss_curve_[c]
-            lines.append(f"{name:>12} {int(model.n_iter_[c]):>5} {str(bool(model.converged_[c])):>5} "
-                         f"{cur[0]:>12.4g} -> {cur[-1]:<12.4g}")
+            lines.append(f"{name:>{w}} {int(model.n_iter_[c]):>5} {str(bool(model.converged_[c])):>5}  "
+                         f"{cur[0]:.4g} -> {cur[-1]:.4g}")
     if model.single_mode_:
         lines += ["", "phones with one mode:"]
         why: dict[str, list] = {}
@@ -529,3 +550,35 @@ def inspect_report(model: DAM, *, max_phones: int | None = None) -> str:
         for r, ps in why.items():
             lines.append(f"  {r}: {' '.join(ps)}")
     return "\n".join(lines)
+
+
+def add_inspect(sub) -> None:
+    """The ``dam inspect MODEL_FILE`` subcommand (registered by :mod:`dam.cli`)."""
+    p = sub.add_parser("inspect", help="print what a fitted DAM learned",
+                       description="Summary of a fitted DAM (or dam-m0): per phone its modes, their "
+                                   "training counts and sigmas; EM convergence per channel; phones "
+                                   "with one mode and why. With --phone, that phone's modes in full "
+                                   "(sigmas per channel and the paper's monomial coefficients).")
+    p.add_argument("model_file", metavar="MODEL_FILE")
+    p.add_argument("--phone", action="append", default=None, help="show this phone in full (repeatable)")
+    p.set_defaults(func=cmd_inspect)
+
+
+def cmd_inspect(args) -> int:
+    from .base import load
+    model = load(args.model_file)
+    if not isinstance(model, DAM):
+        raise TypeError(f"{args.model_file}: holds a {type(model).__name__} ({model.name!r}); "
+                        "`dam inspect` reads DAM model files (dam, dam-m0)")
+    print(inspect_report(model))
+    for phone in args.phone or ():
+        info = model.modes_of(phone)
+        print(f"\nphone {phone!r}: {info['n_modes']} mode(s)" +
+              (f" ({info['single_mode']})" if info["single_mode"] else ""))
+        with np.printoptions(precision=4, suppress=True, linewidth=120):
+            for g in range(info["n_modes"]):
+                print(f"  mode {g}: {int(info['counts'][g])} occurrences")
+                for c, ch in enumerate(model.channels_):
+                    print(f"    {ch:>14}: sigma={info['sigma'][g, c]:.3f}  "
+                          f"a^0..a^M={info['coef_monomial'][g, :, c]}")
+    return 0

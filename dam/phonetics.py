@@ -24,7 +24,7 @@ _CLASSES: dict[str, tuple[str, ...]] = {
     "glottal": ("hh", "h", "?", "HH", "Q"),
     "approximant": ("w", "W", "er", "ER", "L"),
     "front_vowel": ("iy", "ih", "eh", "ae", "ey", "i", "i:", "I", "e", "e:", "E", "E:", "y:", "2:", "9",
-                    "IY", "IH", "EH", "AE", "EY"),
+                    "Y", "2", "IY", "IH", "EH", "AE", "EY"),
     "central_vowel": ("ah", "ax", "@", "6", "a", "a:", "aI", "aU", "ay", "aw", "AH", "AX", "AY", "AW"),
     "back_vowel": ("uw", "uh", "ao", "aa", "ow", "oy", "u", "u:", "U", "o", "o:", "O", "OY", "UW", "UH",
                    "AO", "AA", "OW", "OY_"),

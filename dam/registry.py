@@ -15,6 +15,14 @@ _REGISTRY: dict[str, str] = {
     "target-interpolation": "baselines.reference:TargetInterpolation",
     "dam": "dam.model:DAM",
     "dam-m0": "dam.model:DAMM0",
+    "cohen-massaro": "baselines.cohen_massaro:CohenMassaro",
+    "mmm": "baselines.mmm:MMM",
+    "dtree": "baselines.dtree:DecisionTree",
+    "sliding-dnn": "baselines.nn.sliding_dnn:SlidingDNN",
+    "lstm": "baselines.nn.lstm:FanLSTM",
+    "causal-mlp": "baselines.nn.causal_mlp:CausalMLP",
+    "gru": "baselines.nn.rnn:RecurrentDecoder",
+    "transformer": "baselines.nn.transformer:TransformerDecoder",
 }
 _LOADED: dict[str, type] = {}
 

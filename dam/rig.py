@@ -23,7 +23,7 @@ import numpy as np
 
 from .data import Corpus, DataError, Utterance
 
-__all__ = ["LinearRig", "check_frames", "check_bounds", "map_trajectories", "stack_frames"]
+__all__ = ["LinearRig", "as_rig", "check_frames", "check_bounds", "map_trajectories", "stack_frames"]
 
 
 def check_frames(X, field: str, *, n_dims: int | None = None, source: str | None = None,
@@ -176,6 +176,27 @@ class LinearRig:
         except DataError as exc:
             raise DataError(f"{deltas_path}" + (f", {neutral_path}" if neutral_path else ""),
                             exc.field, exc.value, str(exc).split(": ", 2)[-1]) from None
+
+
+def as_rig(rig, n_controls: int | None = None, *, count_name: str = "n_controls"):
+    """A rig argument as ``(linear, function, n_controls)``.
+
+    ``rig`` is a :class:`LinearRig`, a bare blendshape matrix
+    ``(n_controls, n_dims)`` (zero neutral, the paper's ``sum_k V(C_k)``) or a
+    callable, which then needs ``n_controls``. ``linear`` is the LinearRig or
+    None for a callable; ``function`` maps controls to coordinates.
+    """
+    if isinstance(rig, LinearRig):
+        return rig, rig, rig.n_controls
+    if callable(rig):
+        if n_controls is None:
+            raise DataError(None, count_name, None, f"a rig given as a function needs {count_name}")
+        return None, rig, int(n_controls)
+    if rig is None:
+        raise DataError(None, "rig", None, "no rig given")
+    deltas = check_frames(rig, "rig")
+    lin = LinearRig(np.zeros(deltas.shape[1]), deltas)
+    return lin, lin, lin.n_controls
 
 
 def load_matrix(path: str, field: str) -> np.ndarray:

@@ -140,3 +140,15 @@ def tiny_pair_corpus():
         y[10:40] = level
         utts.append(Utterance(a, y, 100, ["x"], name=f"u{k}"))
     return Corpus(utts)
+
+
+def test_dilated_windows_hand_computation():
+    # ky = 3, dilation 2: row i predicts frames i-2, i, i+2
+    P = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0], [10.0, 11.0, 12.0]])
+    # frame 0: w0 entry 1 (2), w2 entry 0 (7); frame 1: w1 e1 (5), w3 e0 (10);
+    # frame 2: w0 e2 (3), w2 e1 (8); frame 3: w1 e2 (6), w3 e1 (11)
+    np.testing.assert_allclose(overlap_average(P, 3, 1, dilation=2)[:, 0], [4.5, 7.5, 5.5, 8.5])
+    X = window_features(_hand_alignment(), 10, 5, ["aa", "p", "sil"], kx=3, dilation=2)
+    np.testing.assert_array_equal(X[2], [0, 0, 1, 0, 1, 0, 1, 0, 0])  # frames 0, 2, 4: sil, p, aa
+    Y = np.arange(7.0)[:, None]
+    np.testing.assert_allclose(overlap_average(window_targets(Y, ky=5, dilation=3), 5, 1, dilation=3), Y)

@@ -3,9 +3,11 @@
 A subclass says how to build its network and how to turn utterances into
 training samples and network outputs back into frames:
 
-``_make_network(n_inputs, n_outputs, key) -> equinox.Module``
-    Built from hyperparameters alone, so a saved model is rebuilt from its
-    parameters and its weight arrays (nothing is pickled).
+``_network_spec(n_inputs, n_outputs) -> (NetworkClass, kwargs)``
+    The network is built from hyperparameters alone (``kwargs`` hashable
+    values: ints, floats, str, tuples), so a saved model is rebuilt from its
+    parameters and its weight arrays (nothing is pickled), and refits of the
+    same architecture reuse the compiled code.
 ``_samples(encoder, utterance, y) -> (X, Y, W)``
     Training samples of one utterance; ``y`` is its standardized trajectory.
 ``_forward(network, encoder, alignment, n_frames) -> (n_frames, n_channels)``
@@ -49,8 +51,8 @@ class NeuralSynthesizer(Synthesizer):
         0 disables early stopping).
     dropout : float
     random_state : int or None, default 0
-        Seeds the validation split, the initial weights, shuffling and
-        dropout (``jax.random.key``). None draws a fresh seed.
+        Seeds the validation split and the initial weights (numpy), and the
+        shuffling and dropout (``jax.random.key``). None draws a fresh seed.
     verbose : int, default 1
         0 silences the progress bar (it is shown only on a terminal anyway).
     unknown_phone : {"error", "fallback"}, default "error"
@@ -81,8 +83,14 @@ class NeuralSynthesizer(Synthesizer):
     _clip_norm: float | None = None  # recurrent networks clip their gradients
 
     # -- hooks ---------------------------------------------------------------
-    def _make_network(self, n_inputs: int, n_outputs: int, key):  # pragma: no cover - abstract
+    def _network_spec(self, n_inputs: int, n_outputs: int) -> tuple:  # pragma: no cover - abstract
         raise NotImplementedError
+
+    def _make_network(self, n_inputs: int, n_outputs: int, seed: int):
+        """The network with its initial weights drawn from ``seed``."""
+        from .train import initial_network
+        cls, kwargs = self._network_spec(n_inputs, n_outputs)
+        return initial_network(cls, kwargs, seed)
 
     def _samples(self, encoder, utterance, y: np.ndarray):  # pragma: no cover - abstract
         raise NotImplementedError
@@ -162,13 +170,12 @@ class NeuralSynthesizer(Synthesizer):
         X, Yt, W = self._stack(encoder, train)
         Xv, Yv, Wv = self._stack(encoder, val)
         self.n_inputs_, self.n_outputs_ = int(X.shape[-1]), int(Yt.shape[-1])
-        k_init, k_train = jax.random.split(jax.random.key(seed))
-        net = self._make_network(self.n_inputs_, self.n_outputs_, k_init)
+        net = self._make_network(self.n_inputs_, self.n_outputs_, seed)
         net, hist = train_network(
             net, X, Yt, W, X_val=Xv, Y_val=Yv, W_val=Wv,
             optimizer=make_optimizer(self.optimizer, self.learning_rate, self._clip_norm),
             batch_size=self.batch_size, max_epochs=self.max_epochs, patience=self.patience,
-            key=k_train, verbose=self.verbose, desc=self.name or type(self).__name__)
+            key=jax.random.key(seed), verbose=self.verbose, desc=self.name or type(self).__name__)
         self._net = net
         self._encoder = encoder
         self.weights_ = network_leaves(net)
@@ -183,10 +190,13 @@ class NeuralSynthesizer(Synthesizer):
     def _network(self):
         """The equinox network, rebuilt from ``weights_`` after loading."""
         if getattr(self, "_net", None) is None:
+            import equinox as eqx
             import jax
 
             from .train import network_from_leaves
-            skeleton = self._make_network(self.n_inputs_, self.n_outputs_, jax.random.key(0))
+            # Shapes only: nothing is drawn or compiled, the saved arrays fill it.
+            cls, kwargs = self._network_spec(self.n_inputs_, self.n_outputs_)
+            skeleton = eqx.filter_eval_shape(lambda k: cls(**kwargs, key=k), jax.random.key(0))
             self._net = network_from_leaves(skeleton, self.weights_)
         return self._net
 
@@ -206,6 +216,7 @@ class NeuralSynthesizer(Synthesizer):
         return out * self.y_scale_ + self.y_mean_
 
     def _set_state(self, state: dict) -> None:
+        """Restore the saved state; the network is rebuilt on the first prediction."""
         super()._set_state(state)
         self._net = None
         self._encoder = None

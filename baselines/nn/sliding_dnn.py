@@ -150,8 +150,10 @@ class SlidingDNN(NeuralSynthesizer):
             raise ValueError(f"{type(self).__name__}: parameter 'hidden_layer_sizes' is {sizes!r}; "
                              "must be a tuple of positive integers")
 
-    def _make_network(self, n_inputs, n_outputs, key):
-        return WindowMLP(n_inputs, n_outputs, self.hidden_layer_sizes, self.activation, self.dropout, key=key)
+    def _network_spec(self, n_inputs, n_outputs):
+        return WindowMLP, dict(n_inputs=n_inputs, n_outputs=n_outputs,
+                               hidden=tuple(int(h) for h in self.hidden_layer_sizes),
+                               activation=self.activation, dropout=float(self.dropout))
 
     def _inputs(self, encoder, alignment, n_frames):
         return encoder.windows(alignment, self.frame_rate_, n_frames, k=self.kx, align=self._align,

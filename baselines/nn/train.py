@@ -19,6 +19,7 @@ similar length; a second call with the same bucket never recompiles.
 """
 from __future__ import annotations
 
+import functools
 import math
 import sys
 from dataclasses import dataclass, field
@@ -30,7 +31,7 @@ import numpy as np
 import optax
 
 __all__ = ["TrainHistory", "train_network", "make_optimizer", "weighted_mse", "predict_padded",
-           "bucket_length", "TRACE_COUNT", "network_leaves", "network_from_leaves"]
+           "bucket_length", "TRACE_COUNT", "initial_network", "network_leaves", "network_from_leaves"]
 
 # How many times the prediction function has been traced (compiled); the
 # tests read it to prove that a second prediction does not recompile.
@@ -62,8 +63,13 @@ class TrainHistory:
     stopped_early: bool = False
 
 
+@functools.lru_cache(maxsize=64)
 def make_optimizer(name: str, learning_rate: float, clip_norm: float | None = None):
-    """An optax optimiser: ``"adam"`` or ``"sgd"`` (momentum 0.9), optionally clipped."""
+    """An optax optimiser: ``"adam"`` or ``"sgd"`` (momentum 0.9), optionally clipped.
+
+    Cached, so equal settings give the same object and the compiled training
+    step is reused across fits.
+    """
     if name == "adam":
         opt = optax.adam(learning_rate)
     elif name == "sgd":
@@ -143,8 +149,7 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
     """
     from tqdm.auto import tqdm
 
-    params, static = eqx.partition(net, eqx.is_inexact_array)
-    opt_state = optimizer.init(params)
+    opt_state = optimizer.init(eqx.filter(net, eqx.is_inexact_array))
     host = _host(X, Y, W)
     X, Y, W = (jnp.asarray(a) for a in host)
     n = X.shape[0]
@@ -154,31 +159,7 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
     if validate:
         host_val = _host(X_val, Y_val, W_val)
 
-    def batch_loss(p, xb, yb, wb, k):
-        pred = _batched_apply(eqx.combine(p, static), xb, wb, k)
-        s, c = weighted_mse(pred, yb, wb)
-        return s / jnp.maximum(c, 1e-12)
-
-    @jax.jit
-    def run_epoch(p, state, X, Y, W, key):
-        key, k_order, k_drop = jax.random.split(key, 3)
-        order = _epoch_order(k_order, n, batch_size)
-
-        def step(carry, idx_k):
-            p, state = carry
-            idx, kb = idx_k
-            loss, grads = jax.value_and_grad(batch_loss)(p, X[idx], Y[idx], W[idx], kb)
-            updates, state = optimizer.update(grads, state, p)
-            return (optax.apply_updates(p, updates), state), loss
-        keys = jax.random.split(k_drop, order.shape[0])
-        (p, state), losses = jax.lax.scan(step, (p, state), (order, keys))
-        return p, state, jnp.mean(losses), key
-
-    @jax.jit
-    def chunk_error(p, xb, yb, wb):
-        return weighted_mse(_batched_apply(eqx.combine(p, static), xb, wb, None), yb, wb)
-
-    def evaluate(p, X, Y, W):
+    def evaluate(net, X, Y, W):
         # Host-side chunks of one compiled size; padded rows carry weight 0.
         total = count = 0.0
         for lo in range(0, X.shape[0], eval_chunk):
@@ -186,17 +167,17 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
             pad = eval_chunk - sl[0].shape[0]
             if pad:
                 sl = [np.concatenate([a, np.zeros((pad,) + a.shape[1:], a.dtype)]) for a in sl]
-            s, c = chunk_error(p, *sl)
+            s, c = _chunk_error(net, *sl)
             total, count = total + float(s), count + float(c)
         return total / max(count, 1e-12)
 
-    history = TrainHistory(initial_loss=evaluate(params, *host))
-    best = (math.inf, params, 0)
+    history = TrainHistory(initial_loss=evaluate(net, *host))
+    best = (math.inf, net, 0)
     bar = tqdm(range(1, max_epochs + 1), desc=desc, file=sys.stderr, leave=False,
                disable=True if not verbose else None)
     since_best = 0
     for epoch in bar:
-        params, opt_state, loss, key = run_epoch(params, opt_state, X, Y, W, key)
+        net, opt_state, loss, key = _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size)
         loss = float(loss)
         if not math.isfinite(loss):
             raise FloatingPointError(f"{desc}: the training loss became {loss} at epoch {epoch}; "
@@ -204,24 +185,55 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
         history.loss_curve.append(loss)
         shown = {"loss": f"{loss:.4g}"}
         if validate:
-            val = evaluate(params, *host_val)
+            val = evaluate(net, *host_val)
             history.validation_curve.append(val)
             shown["val"] = f"{val:.4g}"
             if val < best[0] * (1.0 - tol):
-                best, since_best = (val, params, epoch), 0
+                best, since_best = (val, net, epoch), 0
             else:
                 since_best += 1
         else:
-            best = (loss, params, epoch)
+            best = (loss, net, epoch)
         bar.set_postfix(shown, refresh=False)
         if validate and since_best >= patience:
             history.stopped_early = True
             break
     bar.close()
     if max_epochs > 0:
-        params = best[1]
+        net = best[1]
         history.best_epoch = best[2]
-    return eqx.combine(params, static), history
+    return net, history
+
+
+# The compiled pieces are module-level so that refits of the same architecture
+# on data of the same shapes reuse them (equinox hashes the static structure).
+def _batch_loss(net, xb, yb, wb, key):
+    s, c = weighted_mse(_batched_apply(net, xb, wb, key), yb, wb)
+    return s / jnp.maximum(c, 1e-12)
+
+
+@eqx.filter_jit
+def _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size):
+    """One pass over shuffled mini-batches as a single ``lax.scan``."""
+    key, k_order, k_drop = jax.random.split(key, 3)
+    order = _epoch_order(k_order, X.shape[0], batch_size)
+    params, static = eqx.partition(net, eqx.is_inexact_array)
+
+    def step(carry, idx_k):
+        params, state = carry
+        idx, kb = idx_k
+        loss, grads = jax.value_and_grad(
+            lambda p: _batch_loss(eqx.combine(p, static), X[idx], Y[idx], W[idx], kb))(params)
+        updates, state = optimizer.update(grads, state, params)
+        return (optax.apply_updates(params, updates), state), loss
+    keys = jax.random.split(k_drop, order.shape[0])
+    (params, opt_state), losses = jax.lax.scan(step, (params, opt_state), (order, keys))
+    return eqx.combine(params, static), opt_state, jnp.mean(losses), key
+
+
+@eqx.filter_jit
+def _chunk_error(net, xb, yb, wb):
+    return weighted_mse(_batched_apply(net, xb, wb, None), yb, wb)
 
 
 def bucket_length(n: int, minimum: int = 64) -> int:
@@ -268,17 +280,54 @@ def predict_padded(net, X, W=None, *, sequence: bool = False) -> np.ndarray:
     return np.asarray(out[:n], dtype=float)
 
 
+def initial_network(cls, kwargs: dict, seed: int):
+    """``cls(**kwargs)`` with equinox's default initial weights, drawn with numpy.
+
+    equinox draws: uniform(-l, l) with ``l = 1/sqrt(in_features)`` for a
+    Linear layer and ``l = 1/sqrt(hidden_size)`` for GRU/LSTM cells;
+    LayerNorm starts at weight 1, bias 0. Any other array (a position
+    embedding) gets normal(0, 0.02). The same rules are applied here to a
+    shape-only skeleton with ``numpy.random.default_rng(seed)``: jax's own
+    draws took longer to compile on a CPU than training a small network.
+    """
+    rng = np.random.default_rng(seed)
+    skeleton = eqx.filter_eval_shape(lambda: cls(**kwargs, key=jax.random.key(0)))
+    cells = (eqx.nn.GRUCell, eqx.nn.LSTMCell)
+
+    def draw(limit):
+        return lambda s: jnp.asarray(rng.uniform(-limit, limit, s.shape), s.dtype)
+
+    def init(node):
+        if isinstance(node, eqx.nn.LayerNorm):
+            return eqx.tree_at(lambda m: (m.weight, m.bias), node,
+                               (jnp.ones(node.weight.shape, node.weight.dtype),
+                                jnp.zeros(node.bias.shape, node.bias.dtype)))
+        if isinstance(node, eqx.nn.Linear):
+            fill = draw(1.0 / math.sqrt(max(1, node.weight.shape[1])))
+        elif isinstance(node, cells):
+            fill = draw(math.sqrt(1.0 / node.hidden_size))
+        elif isinstance(node, jax.ShapeDtypeStruct):
+            return jnp.asarray(0.02 * rng.standard_normal(node.shape), node.dtype)
+        else:  # not an array (a dropout rate)
+            return node
+        return jax.tree_util.tree_map(lambda s: fill(s) if isinstance(s, jax.ShapeDtypeStruct) else s, node)
+
+    is_leaf = lambda x: isinstance(x, (eqx.nn.LayerNorm, eqx.nn.Linear, *cells, jax.ShapeDtypeStruct))  # noqa: E731
+    return jax.tree_util.tree_map(init, skeleton, is_leaf=is_leaf)
+
+
 def network_leaves(net) -> list[np.ndarray]:
     """The arrays of an equinox network, in pytree order (for saving)."""
     return [np.asarray(leaf) for leaf in jax.tree_util.tree_leaves(eqx.filter(net, eqx.is_array))]
 
 
 def network_from_leaves(skeleton, leaves) -> "eqx.Module":
-    """Put saved ``leaves`` into ``skeleton`` (a network of the same hyperparameters).
+    """Put saved ``leaves`` into ``skeleton`` (a network of the same hyperparameters,
+    e.g. from ``equinox.filter_eval_shape``, whose arrays may be shape placeholders).
 
     Raises ValueError if the number or the shapes of the arrays differ.
     """
-    params, static = eqx.partition(skeleton, eqx.is_array)
+    params, static = eqx.partition(skeleton, lambda x: eqx.is_array(x) or isinstance(x, jax.ShapeDtypeStruct))
     old, treedef = jax.tree_util.tree_flatten(params)
     if len(old) != len(leaves):
         raise ValueError(f"the saved weights hold {len(leaves)} arrays, the network needs {len(old)}")

@@ -47,7 +47,7 @@ import os
 import shutil
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Sequence
@@ -59,8 +59,10 @@ from ..data import SILENCE, Alignment, Corpus, DataError, Utterance
 __all__ = [
     "VTL_CHANNELS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",
     "Word", "PhrasePlan", "load_lexicon", "extract_articubench_lexicon", "map_phones",
-    "check_vtl_symbols", "probe_vtl_symbol", "split_words", "plan_phrases", "segment_file_text",
-    "read_tract_sequence", "resample_tract", "synthesize_phrase", "generate_vtl_corpus", "main",
+    "check_vtl_symbols", "probe_vtl_symbol", "split_words", "plan_phrases", "plan_corpus",
+    "segment_file_text",
+    "read_tract_sequence", "resample_tract", "synthesize_phrase", "generate_vtl_corpus",
+    "add_generate_vtl", "main",
 ]
 
 #: The 19 tract parameters of VTL's vocal tract model, in VTL's order.
@@ -309,7 +311,9 @@ def plan_phrases(words: Sequence[Word], *, minutes: float, rng, prefix: str = "u
         Phone durations are clipped to this range (s); the lexicon's longest
         phones (up to 1 s) are alignment outliers.
     audio_fraction : float, default 0
-        Probability that a phrase also gets audio.
+        Share of the phrases that also get audio: ``round(audio_fraction *
+        n_phrases)`` of them, at least one if ``audio_fraction > 0``, evenly
+        spread over the list.
     mapping : dict, optional
         Symbol map, default :data:`SYMBOL_MAP`.
 
@@ -344,10 +348,14 @@ def plan_phrases(words: Sequence[Word], *, minutes: float, rng, prefix: str = "u
         labels.append("")
         durs.append(float(rng.uniform(*edge)))
         durs = tuple(round(d, 3) for d in durs)
-        audio = bool(rng.random() < audio_fraction)
         plans.append(PhrasePlan(f"{prefix}{len(plans):04d}", tuple(words[i].word for i in picked),
-                                tuple(labels), durs, tuple(starts), round(r, 4), audio))
+                                tuple(labels), durs, tuple(starts), round(r, 4), False))
         total += sum(durs)
+    # Audio for an exact, evenly spread share of the phrases (at least one when asked for):
+    # a random draw could leave a small test part without any.
+    n_audio = min(len(plans), max(1, round(audio_fraction * len(plans)))) if audio_fraction > 0 else 0
+    for k in np.unique(np.linspace(0, len(plans) - 1, n_audio).round().astype(int)) if n_audio else ():
+        plans[k] = replace(plans[k], audio=True)
     return plans
 
 
@@ -423,7 +431,8 @@ def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate
     import vocaltractlab_cython as vtl
 
     check_vtl_symbols([lab for lab in plan.labels if lab], source=plan.name)
-    ends = np.cumsum(plan.durations)
+    # Durations are whole milliseconds: rounding the sums keeps boundaries exact in the TextGrid.
+    ends = np.round(np.cumsum(plan.durations), 3)
     alignment = Alignment(plan.labels, ends - np.asarray(plan.durations), ends, source=plan.name)
     with tempfile.TemporaryDirectory(prefix="dam_vtl_", dir=workdir) as tmp:
         seg, ges, trk = (os.path.join(tmp, f"{plan.name}.{ext}") for ext in ("seg", "ges", "tract"))
@@ -463,7 +472,8 @@ def _write_split(results: list[dict], plans: list[PhrasePlan], directory: Path, 
         stem = res["name"]
         # npy as float32: half the size of float64 and far finer than any articulograph.
         traj = res["trajectory"].astype(np.float32)
-        write_textgrid(res["alignment"], directory / f"{stem}.TextGrid")
+        # The short text format: half the bytes of the long one, read by Praat and praatio alike.
+        write_textgrid(res["alignment"], directory / f"{stem}.TextGrid", format="short_textgrid")
         if trajectory_format == "npy":
             write_npy(traj, directory / f"{stem}.npy")
         else:
@@ -492,9 +502,33 @@ def _run(plans, *, frame_rate, audio_rate, n_jobs, verbose, desc):
     return list(tqdm(stream, total=len(plans), desc=desc, disable=not show, file=sys.stderr))
 
 
+def plan_corpus(*, seed: int = 0, n_train_minutes: float = 10.0, n_test_minutes: float = 2.5,
+                test_word_fraction: float = 0.2, audio_fraction: float = 0.05, lexicon=None,
+                mapping: dict | None = None, **plan_options) -> tuple[dict, dict]:
+    """The phrases :func:`generate_vtl_corpus` synthesizes for these arguments.
+
+    Returns
+    -------
+    plans : dict
+        ``{"train": [PhrasePlan, ...], "test": [...]}``.
+    n_words : dict
+        Words available to each split.
+    """
+    words = lexicon if isinstance(lexicon, list) else load_lexicon(lexicon or LEXICON_PATH)
+    rng = np.random.default_rng(seed)
+    train_words, test_words = split_words(words, test_word_fraction, rng)
+    plans = {
+        "train": plan_phrases(train_words, minutes=n_train_minutes, rng=rng, prefix="train",
+                              audio_fraction=audio_fraction, mapping=mapping, **plan_options),
+        "test": plan_phrases(test_words, minutes=n_test_minutes, rng=rng, prefix="test",
+                             audio_fraction=audio_fraction, mapping=mapping, **plan_options),
+    }
+    return plans, {"train": len(train_words), "test": len(test_words)}
+
+
 def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0,
                         n_test_minutes: float = 2.5, test_word_fraction: float = 0.2,
-                        frame_rate: float = 100.0, audio_fraction: float = 0.1,
+                        frame_rate: float = 100.0, audio_fraction: float = 0.05,
                         audio_rate: int = 16000, trajectory_format: str = "npy", decimals: int = 5,
                         n_jobs: int = 1, verbose: int = 1, overwrite: bool = False,
                         lexicon=None, mapping: dict | None = None, **plan_options) -> dict[str, Corpus]:
@@ -513,7 +547,7 @@ def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0
         phrases use disjoint words.
     frame_rate : float, default 100.0
         Output frame rate in Hz (at most VTL's 400.9 Hz).
-    audio_fraction : float, default 0.1
+    audio_fraction : float, default 0.05
         Share of phrases that also get a 16-bit WAV (synthesis of audio
         takes about 4 s of CPU per second of speech; trajectories 0.05 s).
     audio_rate : int, default 16000
@@ -552,15 +586,9 @@ def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0
                 raise DataError(str(d), "out_dir", str(d), "exists and is not empty",
                                 "pass overwrite=True (--overwrite) to replace it")
             shutil.rmtree(d)
-    words = load_lexicon(lexicon or LEXICON_PATH) if not isinstance(lexicon, list) else lexicon
-    rng = np.random.default_rng(seed)
-    train_words, test_words = split_words(words, test_word_fraction, rng)
-    plans = {
-        "train": plan_phrases(train_words, minutes=n_train_minutes, rng=rng, prefix="train",
-                              audio_fraction=audio_fraction, mapping=mapping, **plan_options),
-        "test": plan_phrases(test_words, minutes=n_test_minutes, rng=rng, prefix="test",
-                             audio_fraction=audio_fraction, mapping=mapping, **plan_options),
-    }
+    plans, n_words = plan_corpus(seed=seed, n_train_minutes=n_train_minutes, n_test_minutes=n_test_minutes,
+                                 test_word_fraction=test_word_fraction, audio_fraction=audio_fraction,
+                                 lexicon=lexicon, mapping=mapping, **plan_options)
     version = vtl.get_version()
     corpora = {}
     for split, split_plans in plans.items():
@@ -571,7 +599,7 @@ def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0
             "vtl_version": f"vocaltractlab-cython {_package_version()}, {version}",
             "speaker": "JD3", "lexicon": "articubench 0.3.5 data/lexical_embedding_vectors.pkl",
             "symbol_map": dict(SYMBOL_MAP if mapping is None else mapping),
-            "n_words": len(train_words if split == "train" else test_words),
+            "n_words": n_words[split],
             "licence": LICENCE_NOTE,
         }
         corpora[split] = _write_split(results, split_plans, out / split, frame_rate=frame_rate,
@@ -589,20 +617,48 @@ def _package_version() -> str:
 
 
 # -- command line --------------------------------------------------------------
-def add_generate_arguments(p: argparse.ArgumentParser) -> None:
-    """The options of ``generate`` (shared with ``dam generate-vtl``)."""
+def add_generate_arguments(p: argparse.ArgumentParser, *, quiet: bool = True) -> None:
+    """The options of ``generate`` (shared with ``dam generate-vtl``, which has its own ``-q``)."""
     p.add_argument("out_dir", help="directory that receives train/ and test/")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--train-minutes", type=float, default=10.0, dest="n_train_minutes")
-    p.add_argument("--test-minutes", type=float, default=2.5, dest="n_test_minutes")
-    p.add_argument("--test-word-fraction", type=float, default=0.2)
-    p.add_argument("--frame-rate", type=float, default=100.0)
-    p.add_argument("--audio-fraction", type=float, default=0.1,
-                   help="share of phrases that also get 16 kHz audio (slow: ~4 s CPU per s)")
-    p.add_argument("--format", choices=("npy", "csv"), default="npy", dest="trajectory_format")
-    p.add_argument("-j", "--n-jobs", type=int, default=1)
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--train-minutes", type=float, default=10.0, dest="n_train_minutes", metavar="MIN",
+                   help="speech in train/, pauses included (default 10)")
+    p.add_argument("--test-minutes", type=float, default=2.5, dest="n_test_minutes", metavar="MIN",
+                   help="speech in test/ (default 2.5)")
+    p.add_argument("--test-word-fraction", type=float, default=0.2, metavar="F",
+                   help="share of the words kept for test/ only (default 0.2)")
+    p.add_argument("--frame-rate", type=float, default=100.0, metavar="HZ",
+                   help="output frame rate, at most 400.9 (default 100)")
+    p.add_argument("--audio-fraction", type=float, default=0.05, metavar="F",
+                   help="share of phrases that also get 16 kHz audio (default 0.05; audio costs "
+                        "~4 s of CPU per second of speech)")
+    p.add_argument("--format", choices=("npy", "csv"), default="npy", dest="trajectory_format",
+                   help="trajectory files: float32 .npy (default) or .csv")
+    p.add_argument("-j", "--n-jobs", type=int, default=1, metavar="N",
+                   help="worker processes, -1 for all cores (default 1)")
     p.add_argument("--overwrite", action="store_true", help="replace existing train/ and test/")
-    p.add_argument("-q", "--quiet", action="store_true")
+    if quiet:
+        p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+_DESCRIPTION = ("Generate an articulatory corpus with VocalTractLab: phrases of German words (phones and "
+                "durations measured in real speech), varied speaking rate and pauses, synthesized into VTL's "
+                "19 tract parameters at --frame-rate, some with 16 kHz audio; train/ and test/ use disjoint "
+                "words. Same seed, same files.")
+_EPILOG = "the bundled corpus: python -m dam.datasets.vtl generate dam/datasets/data/vtl --seed 0 --overwrite"
+
+
+def add_generate_vtl(sub) -> None:
+    """``dam generate-vtl``: the subcommand adder for :mod:`dam.cli`."""
+    p = sub.add_parser("generate-vtl", help="generate a VocalTractLab articulatory corpus (needs dam[vtl])",
+                       description=_DESCRIPTION, epilog=_EPILOG)
+    add_generate_arguments(p, quiet=False)
+    p.set_defaults(func=_cmd_generate_vtl)
+
+
+def _cmd_generate_vtl(args) -> int:
+    run_generate(args)
+    return 0
 
 
 def run_generate(args) -> dict[str, Corpus]:
@@ -610,7 +666,8 @@ def run_generate(args) -> dict[str, Corpus]:
         args.out_dir, seed=args.seed, n_train_minutes=args.n_train_minutes,
         n_test_minutes=args.n_test_minutes, test_word_fraction=args.test_word_fraction,
         frame_rate=args.frame_rate, audio_fraction=args.audio_fraction,
-        trajectory_format=args.trajectory_format, n_jobs=args.n_jobs, verbose=0 if args.quiet else 1,
+        trajectory_format=args.trajectory_format, n_jobs=args.n_jobs,
+        verbose=0 if getattr(args, "quiet", False) else 1,
         overwrite=args.overwrite)
     for split, c in corpora.items():
         print(f"{split}: {c!r} -> {c.source}")
@@ -622,7 +679,8 @@ def main(argv=None) -> int:
         prog="python -m dam.datasets.vtl",
         description="Generate articulatory corpora with VocalTractLab (German phrases, 19 tract parameters).")
     sub = parser.add_subparsers(dest="command", required=True)
-    gen = sub.add_parser("generate", help="synthesize a corpus with train/ and test/ parts")
+    gen = sub.add_parser("generate", help="synthesize a corpus with train/ and test/ parts",
+                         description=_DESCRIPTION, epilog=_EPILOG)
     add_generate_arguments(gen)
     lex = sub.add_parser("lexicon", help="extract the word list from articubench's lexical_embedding_vectors.pkl")
     lex.add_argument("pkl", help="path to articubench/data/lexical_embedding_vectors.pkl")

@@ -1,0 +1,61 @@
+"""The LSTM baseline of Taylor et al. (2017), after Fan et al. (2015) (``lstm``).
+
+Taylor et al., Section 7: "We follow the basic setup of [Fan et al. 2015]
+... three hidden layers, a fully-connected layer, and two LSTM layers ...
+500 [units] achieves the best performance. Mini-batch size was 10, and to
+prevent overfitting we use dropout with 50% probability." Fan et al.'s
+network is a deep *bidirectional* LSTM, so the LSTM layers run both ways by
+default. It is the recurrent decoder of :mod:`baselines.nn.rnn` with a tanh
+input layer; the default width is 128 (not 500) to train in minutes on a CPU.
+"""
+from __future__ import annotations
+
+from .rnn import RecurrentDecoder
+
+__all__ = ["FanLSTM"]
+
+
+class FanLSTM(RecurrentDecoder):
+    """A fully connected tanh layer and two (bidirectional) LSTM layers, dropout 0.5.
+
+    Parameters
+    ----------
+    cell : {"lstm", "gru"}, default "lstm"
+    n_layers : int, default 2
+    bidirectional : bool, default True
+    hidden_size : int, default 128
+        Taylor et al. found 500 best.
+    dense_size : int, default 128
+        The fully connected input layer.
+    seq_len : int, default 100
+    dropout : float, default 0.5
+    optimizer : {"adam", "sgd"}, default "adam"
+    learning_rate : float, default 3e-3
+    batch_size : int, default 10
+    max_epochs : int, default 40
+    patience : int, default 5
+    validation_fraction : float, default 0.1
+    encoder, random_state, verbose, unknown_phone
+        See :class:`baselines.nn.base.NeuralSynthesizer`.
+    """
+
+    name = "lstm"
+
+    def __init__(self, *, cell: str = "lstm", n_layers: int = 2, bidirectional: bool = True,
+                 hidden_size: int = 128, dense_size: int = 128, seq_len: int = 100, dropout: float = 0.5,
+                 optimizer: str = "adam", learning_rate: float = 3e-3, batch_size: int = 10,
+                 max_epochs: int = 40, patience: int = 5, validation_fraction: float = 0.1,
+                 encoder: str = "phones", random_state: int | None = 0, verbose: int = 1,
+                 unknown_phone: str = "error"):
+        super().__init__(cell=cell, n_layers=n_layers, bidirectional=bidirectional, hidden_size=hidden_size,
+                         dense_size=dense_size, seq_len=seq_len, dropout=dropout, optimizer=optimizer,
+                         learning_rate=learning_rate, batch_size=batch_size, max_epochs=max_epochs,
+                         patience=patience, validation_fraction=validation_fraction, encoder=encoder,
+                         random_state=random_state, verbose=verbose, unknown_phone=unknown_phone)
+
+    @classmethod
+    def get_test_params(cls) -> list[dict]:
+        return [{"hidden_size": 16, "dense_size": 16, "seq_len": 32, "dropout": 0.0, "max_epochs": 25,
+                 "learning_rate": 1e-2, "batch_size": 16, "verbose": 0},
+                {"n_layers": 1, "bidirectional": False, "hidden_size": 8, "dense_size": 8, "seq_len": 16,
+                 "max_epochs": 2, "verbose": 0}]

@@ -12,7 +12,7 @@ Window spacing. Taylor et al. worked at 29.97 video frames per second, where
 window frames here are ``dilation = round(frame_rate / window_rate)`` frames
 apart (``window_rate = 30`` Hz by default): the same number of frames and the
 same span of context as the paper, at every frame of the data. Every frame
-is a training example (``example_stride`` thins them for long corpora).
+up to 100 Hz is a training example (``example_stride``).
 
 The fitted tree is stored as arrays (children, feature, threshold, value) and
 predicted by walking them in numpy: a saved model needs neither
@@ -93,12 +93,11 @@ class DecisionTree(Synthesizer):
         approximation.
     window_rate : float or None, default 30.0
         Rate (Hz) of the window frames; None uses every data frame (dilation 1).
-    example_stride : int or None, default 1
-        Train on every ``example_stride``-th frame; None uses the dilation
-        (as many examples per second as at ``window_rate``). The feature
-        matrix holds ``n_frames / example_stride`` rows of float32 (2341
-        columns for 40 phones with linguistic features): raise it for long
-        high-rate corpora.
+    example_stride : int or None, default None
+        Train on every ``example_stride``-th frame; None: every frame up to
+        100 Hz, about 100 examples per second above (``ceil(frame_rate / 100)``).
+        The feature matrix holds ``n_frames / example_stride`` rows of float32
+        (2341 columns for 40 phones with linguistic features).
     min_samples_leaf : int, default 10
     max_depth : int or None, default None
     random_state : int, default 0
@@ -120,7 +119,7 @@ class DecisionTree(Synthesizer):
     _tags = {"deterministic": True}
 
     def __init__(self, *, kx: int = 11, ky: int = 5, features: str = "raw", transitions: str = "data",
-                 window_rate: float | None = 30.0, example_stride: int | None = 1, min_samples_leaf: int = 10,
+                 window_rate: float | None = 30.0, example_stride: int | None = None, min_samples_leaf: int = 10,
                  max_depth: int | None = None, random_state: int = 0, unknown_phone: str = "error"):
         self.kx = kx
         self.ky = ky
@@ -170,7 +169,8 @@ class DecisionTree(Synthesizer):
         if self.features == "linguistic" and self.transitions == "data":
             self.transition_clusters_ = fit_transition_clusters(corpus, self.vocabulary_,
                                                                 random_state=self.random_state)
-        stride = self.dilation_ if self.example_stride is None else int(self.example_stride)
+        stride = (int(np.ceil(corpus.frame_rate / 100.0 - 1e-9)) if self.example_stride is None
+                  else int(self.example_stride))
         X, Y = [], []
         for u in corpus:
             # Every stride-th frame, the phase varying over utterances.

@@ -37,7 +37,7 @@ import itertools
 import numpy as np
 
 __all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "pad_layers", "astar",
-           "viterbi", "exhaustive", "path_cost"]
+           "astar_blocks", "viterbi", "exhaustive", "path_cost"]
 
 BOUNDARY = "#"
 
@@ -220,6 +220,44 @@ def astar(node_costs, edge_costs):
                 parent[key] = g
                 heapq.heappush(heap, (c2 + hj, next(tie), j + 1, g2, c2))
     raise RuntimeError("A* found no path (empty layer?)")  # pragma: no cover
+
+
+def astar_blocks(nodes: np.ndarray, edges: np.ndarray):
+    """:func:`astar` on the blocks between layers that have a single node.
+
+    A layer with one node lies on every path, so the cheapest path splits
+    there into independent searches (exact, and most phones have one mode).
+
+    Parameters
+    ----------
+    nodes : ndarray, shape (n_layers, G_max)
+    edges : ndarray, shape (n_layers - 1, G_max, G_max)
+        Rectangular form, see :func:`pad_layers`.
+
+    Returns
+    -------
+    path : list of int
+    cost : float
+    """
+    J = nodes.shape[0]
+    forced = np.isfinite(nodes).sum(axis=1) == 1
+    path = np.argmin(nodes, axis=1)         # the only node of a forced layer
+    j = 0
+    while j < J:
+        if forced[j]:
+            j += 1
+            continue
+        end = j
+        while end < J and not forced[end]:
+            end += 1
+        lo, hi = max(j - 1, 0), min(end + 1, J)   # the forced neighbours anchor the block
+        sub, _ = astar(nodes[lo:hi], edges[lo:hi - 1])
+        path[lo:hi] = sub
+        j = end
+    path = path.tolist()
+    cost = float(nodes[0, path[0]]) + sum(float(edges[i - 1, path[i - 1], path[i]] + nodes[i, path[i]])
+                                          for i in range(1, J))
+    return path, cost
 
 
 def viterbi(node_costs, edge_costs):

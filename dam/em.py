@@ -77,7 +77,7 @@ def fitted_values_all(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, pr)
 
 
 def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float = 1e-6,
-           tol: float = 1e-4, max_iter: int = 50, gn_steps: int = 5, verbose: int = 0,
+           tol: float = 1e-3, max_iter: int = 50, gn_steps: int = 1, verbose: int = 0,
            fixed_sigma: bool = False, projected: bool = True):
     """Fit every channel's animeme coefficients and sigmas.
 
@@ -93,8 +93,8 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         See :func:`ridge_lambda`.
     tol, max_iter : float, int
         Stopping rule of :class:`ConvergenceMonitor`.
-    gn_steps : int, default 5
-        Gauss-Newton steps per M-step.
+    gn_steps : int, default 1
+        Gauss-Newton steps per M-step (the damping carries over between M-steps).
     verbose : int, default 0
         > 0 shows a progress bar over channels on stderr (when it is a TTY).
     fixed_sigma : bool, default False
@@ -151,8 +151,10 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         s = sigma[:, c].copy()
         mon = ConvergenceMonitor(tol, max_iter)
         mon.report(best[c])
+        mu = 1e-3
         while not fixed_sigma and not mon.done:
-            s, a, obj = gauss_newton_sigma(occ, y, a, s, lam=lam, projected=projected, n_steps=gn_steps)
+            s, a, obj, mu = gauss_newton_sigma(occ, y, a, s, lam=lam, projected=projected,
+                                               n_steps=gn_steps, mu=mu)
             if not projected:  # the E-step (the projected M-step re-solves a itself)
                 pr = pairs(occ, s)
                 G, Xty = normal_equations(occ, s, y, pr)

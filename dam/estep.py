@@ -199,13 +199,18 @@ def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray):
     flat = np.hstack(flat)
     wts = np.hstack(wts)
     bounds = np.searchsorted(k, occ.utterance_bounds)
+    key = tuple((v.shape[1], base) for v, base in blocks)
+    cache = occ.__dict__.setdefault("_gram_columns", {})
+    if key not in cache:   # global column of every local column, per utterance
+        cache[key] = [np.concatenate([base + (m[:, None] * w + np.arange(w)).ravel() for w, base in key])
+                      for m in modes_u]
+    columns = cache[key]
     for ui, (p0, p1) in enumerate(zip(bounds[:-1], bounds[1:])):
         if p0 == p1:
             continue
         nf, wu = int(occ.n_frames[k[p0]]), int(width[ui])
         Zl = np.bincount(flat[p0:p1].ravel(), weights=wts[p0:p1].ravel(), minlength=nf * wu).reshape(nf, wu)
-        g = np.concatenate([base + (modes_u[ui][:, None] * v.shape[1] + np.arange(v.shape[1])).ravel()
-                            for v, base in blocks])
+        g = columns[ui]
         ZtZ[np.ix_(g, g)] += Zl.T @ Zl
         s0 = int(r0[p0])
         Zty[g] += Zl.T @ targets[s0:s0 + nf]

@@ -151,11 +151,12 @@ def tied_parameters(n_params: int, bounds, symmetric_pairs: Sequence[tuple[int, 
         col = np.zeros(n_params)
         col[members] = 1.0
         m = float(len(members))
-        if g_lo >= 0:
-            cols.append(col), lows.append(g_lo), highs.append(g_hi), cost.append(m)
-        elif g_hi <= 0:
-            cols.append(col), lows.append(g_lo), highs.append(g_hi), cost.append(-m)
-        else:  # theta = a - b
+        if g_lo >= 0 or g_hi <= 0:  # one sign: |theta| = +theta or -theta, linear on the box
+            cols.append(col)
+            lows.append(g_lo)
+            highs.append(g_hi)
+            cost.append(m if g_lo >= 0 else -m)
+        else:  # both signs: theta = a - b with a, b >= 0 and |theta| = a + b at the optimum
             cols += [col, -col]
             lows += [0.0, 0.0]
             highs += [g_hi, -g_lo]

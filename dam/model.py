@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import animeme as _animeme
-from .astar import BOUNDARY, astar, mode_nll, smoothness_costs
+from .astar import BOUNDARY, astar_blocks, mode_nll, smoothness_costs
 from .base import Synthesizer
 from .data import Alignment, Corpus
 from .dominance import dominance
@@ -61,12 +61,14 @@ class DAM(Synthesizer):
         polynomial tails can stand in for the dominance) and from 1.0 the EM
         stalls in some of them on data generated with known parameters;
         with ``"hold"`` the start hardly matters.
-    tol : float, default 1e-4
-        EM stops when the objective improves by less than this fraction.
+    tol : float, default 1e-3
+        EM stops when the objective improves by less than this fraction in
+        an iteration.
     max_iter : int, default 30
         EM iterations at most (per channel).
-    gn_steps : int, default 3
-        Gauss-Newton steps per M-step.
+    gn_steps : int, default 1
+        Gauss-Newton steps per M-step (by variable projection, so each
+        step also re-solves the animemes: see :func:`dam.mstep.gauss_newton_sigma`).
     w_c, w_s : float, default 1000 and 1
         Weights of the data and smoothness terms of Eq. (10).
     context_smoothing : float, default 0.5
@@ -117,8 +119,8 @@ class DAM(Synthesizer):
     def __init__(self, *, degree: int = 4, normalize: bool = False, extrapolate: str = "polynomial",
                  modes: str = "affinity", n_resample: int = 20, mode_preference="min",
                  min_occurrences: int = 10, min_mode_size: int = 5, ridge: float = 1e-6,
-                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-4, max_iter: int = 30,
-                 gn_steps: int = 3, w_c: float = 1000.0, w_s: float = 1.0,
+                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-3, max_iter: int = 30,
+                 gn_steps: int = 1, w_c: float = 1000.0, w_s: float = 1.0,
                  context_smoothing: float = 0.5, dominance_tol: float = 1e-4,
                  unknown_phone: str = "error", random_state=0, verbose: int = 0):
         self.degree = degree
@@ -364,7 +366,7 @@ class DAM(Synthesizer):
         if all(self.phone_modes_[p][1] == 1 for p in labels):
             return first, 0.0
         nodes, ecosts, _ = self._graph(labels, alignment.durations)
-        path, cost = astar(nodes, ecosts)
+        path, cost = astar_blocks(nodes, ecosts)
         return first + np.asarray(path, dtype=int), cost
 
     def synthesize(self, alignment: Alignment, modes=None, n_frames: int | None = None) -> np.ndarray:
@@ -488,8 +490,8 @@ class DAMM0(DAM):
     def __init__(self, *, degree: int = 0, normalize: bool = False, extrapolate: str = "polynomial",
                  modes: str = "affinity", n_resample: int = 20, mode_preference="min",
                  min_occurrences: int = 10, min_mode_size: int = 5, ridge: float = 1e-6,
-                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-4, max_iter: int = 30,
-                 gn_steps: int = 3, w_c: float = 1000.0, w_s: float = 1.0,
+                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-3, max_iter: int = 30,
+                 gn_steps: int = 1, w_c: float = 1000.0, w_s: float = 1.0,
                  context_smoothing: float = 0.5, dominance_tol: float = 1e-4,
                  unknown_phone: str = "error", random_state=0, verbose: int = 0):
         super().__init__(degree=degree, normalize=normalize, extrapolate=extrapolate, modes=modes,

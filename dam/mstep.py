@@ -102,7 +102,7 @@ def _products(occ, y, cur, coef, sigma, projected):
 
 
 def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma: np.ndarray, *,
-                       lam: float = 0.0, projected: bool = True, n_steps: int = 5, mu: float = 1e-3,
+                       lam: float = 0.0, projected: bool = True, n_steps: int = 1, mu: float = 1e-3,
                        rtol: float = 1e-6, max_tries: int = 8):
     """Damped Gauss-Newton on log(sigma) for one channel.
 
@@ -131,7 +131,7 @@ def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma:
     lam : float, default 0.0
         The ridge of the E-step.
     projected : bool, default True
-    n_steps : int, default 5
+    n_steps : int, default 1
         Accepted Gauss-Newton steps at most.
     mu : float, default 1e-3
         Initial Levenberg-Marquardt damping (relative to the diagonal).
@@ -147,6 +147,8 @@ def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma:
         ``coef`` unchanged, or re-solved at the returned sigma when projected.
     objective : float
         Never above the objective at the starting point.
+    mu : float
+        The damping reached (pass it back in to carry it across M-steps).
     """
     from scipy import linalg
 
@@ -192,4 +194,4 @@ def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma:
             mu *= 10.0
         if not accepted or gain <= rtol * max(obj0, 1e-300):
             break
-    return np.exp(theta), a, obj
+    return np.exp(theta), a, obj, mu

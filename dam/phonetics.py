@@ -162,11 +162,16 @@ _ARPABET = frozenset().union(*TAYLOR_CATEGORIES.values()) | CONSONANTS
 def guess_alphabet(phones) -> str:
     """``"arpabet"`` or ``"sampa"`` for a phone set (case matters: SAMPA /S/ is ARPAbet /sh/).
 
-    ARPAbet when some phone, stress removed and lower-cased, is a two-letter
-    ARPAbet phone SAMPA lacks (``AH0``, ``iy``); SAMPA otherwise.
+    ARPAbet when some phone, stress removed, is a two-letter ARPAbet phone
+    (lower or upper case: ``AH0``, ``iy``) that is not also SAMPA (``OY``);
+    SAMPA otherwise.
     """
-    two = {p for p in _ARPABET if len(p) == 2} - set(_SAMPA_TO_ARPABET)
-    return "arpabet" if any(base_phone(p).lower() in two for p in phones) else "sampa"
+    two = {p for p in _ARPABET if len(p) == 2}
+
+    def arpabet_only(p: str) -> bool:
+        b = base_phone(p)
+        return b not in _SAMPA_TO_ARPABET and (b in two or (b.isupper() and b.lower() in two))
+    return "arpabet" if any(arpabet_only(p) for p in phones) else "sampa"
 
 
 def taylor_categories(label: str, alphabet: str = "arpabet", silence: str = SILENCE) -> frozenset[str]:

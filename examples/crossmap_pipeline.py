@@ -26,12 +26,12 @@ capture session:
 
 Each step saves a figure in the output directory, and ``metrics.json`` holds
 the numbers. The VTL phrases come from the bundled ``vtl`` corpus when it is
-installed, otherwise they are synthesized once (about a minute) and cached in
-``<out>/cache``.
+installed, otherwise they are synthesized once (one to two minutes) and cached
+in ``<out>/cache`` (git-ignored).
 
 Run::
 
-    python examples/crossmap_pipeline.py                 # figures in examples/out/
+    python examples/crossmap_pipeline.py                 # figures in examples/out/crossmap/
     python examples/crossmap_pipeline.py --out /tmp/cm --model phone-mean --minutes 0.3
 """
 from __future__ import annotations
@@ -104,6 +104,8 @@ def tract_corpora(minutes: float, cache: str, seed: int = 0) -> tuple[Corpus, Co
             utts.append(dam.Utterance(r["alignment"], r["trajectory"], 100.0, VTL_CHANNELS, name=r["name"]))
         corpus = Corpus(utts, name=f"vtl-{split}")
         save_corpus(corpus, paths[len(out)], trajectory_format="npy")
+        with open(os.path.join(cache, ".gitignore"), "w") as fh:   # a cache, not a result: keep it out of git
+            fh.write("*\n")
         out.append(corpus)
     return out[0], out[1][:1]
 
@@ -299,8 +301,8 @@ def figure_retarget(rt: RigSpaceRetargeter, rig_a: LinearRig, rig_b: LinearRig, 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "out"),
-                    help="directory for the figures and metrics.json (default: examples/out)")
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "out", "crossmap"),
+                    help="directory for the figures and metrics.json (default: examples/out/crossmap)")
     ap.add_argument("--model", default="dam", help="registered synthesizer to train on the controls (default: dam)")
     ap.add_argument("--minutes", type=float, default=0.5, help="minutes of training phrases (default: 0.5)")
     ap.add_argument("--step", type=int, default=2, help="outline every STEP-th frame, spline the rest (default: 2)")

@@ -105,3 +105,51 @@ def test_bad_params_are_refused():
         CohenMassaro(c_bounds=(2.0, 1.0)).fit(corpus)
     with pytest.raises(ValueError, match="unknown_phone"):
         CohenMassaro(unknown_phone="guess").fit(corpus)
+
+
+def test_fit_rate_thins_the_fitted_frames_without_bias():
+    # a 400 Hz corpus from the model: fitting every 4th frame still recovers the targets
+    corpus = _generated_corpus(n_utts=10, seed=2, frame_rate=400.0)
+    model = CohenMassaro(ridge=1e-9, tol=1e-10, fit_rate=100.0).fit(corpus)
+    assert model._stride(400.0) == 4
+    np.testing.assert_allclose(model.target_, TRUE["target"], atol=1e-3)
+
+
+def test_normal_equations_equal_dense_products():
+    from baselines.cohen_massaro import normal_equations
+    corpus = _generated_corpus(n_utts=3, seed=5)
+    idx = {p: i for i, p in enumerate(PHONES)}
+    designs = [_Design(u.alignment, np.array([idx[lab] for lab in u.alignment.labels]), 100.0, u.n_frames)
+               for u in corpus]
+    ys = [u.trajectory[:, 1] for u in corpus]
+    x = np.random.default_rng(0).normal(0, 0.5, size=20)
+    r, J = residuals_and_jacobian(x, designs, ys, 4)
+    cost, g, H = normal_equations(x, designs, ys, 4)
+    assert cost == pytest.approx(r @ r, rel=1e-12)
+    np.testing.assert_allclose(g, J.T @ r, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(H, J.T @ J, rtol=1e-10, atol=1e-12)
+
+
+def test_levenberg_marquardt_matches_scipy_on_a_bounded_problem():
+    from scipy.optimize import least_squares
+    from baselines.cohen_massaro import levenberg_marquardt
+    t = np.linspace(0, 3, 40)
+    y = 2.0 * np.exp(-1.3 * t) + 0.5
+
+    def resid(x):
+        return x[0] * np.exp(-x[1] * t) + x[2] - y
+
+    def jac(x):
+        e = np.exp(-x[1] * t)
+        return np.stack([e, -x[0] * t * e, np.ones_like(t)], axis=1)
+
+    def normal_eq(x):
+        r, J = resid(x), jac(x)
+        return float(r @ r), J.T @ r, J.T @ J
+
+    lo, hi = np.array([0.0, 0.0, 0.6]), np.array([10.0, 10.0, 10.0])  # the offset bound is active
+    ours, cost, _ = levenberg_marquardt(normal_eq, np.array([1.0, 0.5, 1.0]), lo, hi, tol=1e-12)
+    ref = least_squares(resid, [1.0, 0.5, 1.0], jac=jac, bounds=(lo, hi), ftol=1e-14, xtol=1e-14, gtol=1e-14)
+    np.testing.assert_allclose(ours, ref.x, rtol=1e-5)
+    assert ours[2] == pytest.approx(0.6)
+    assert cost == pytest.approx(2 * ref.cost, rel=1e-8)

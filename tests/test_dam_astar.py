@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from dam.astar import (BOUNDARY, astar, context_counts, exhaustive, mode_nll, path_cost,
-                       smoothness_costs, viterbi)
+from dam.astar import (BOUNDARY, astar, astar_blocks, context_counts, exhaustive, mode_nll, pad_layers,
+                       path_cost, smoothness_costs, viterbi)
 
 
 def _graph(seed, n_layers, max_modes, scale_edges=1.0):
@@ -35,6 +35,10 @@ def test_astar_equals_dynamic_programming_on_long_random_graphs(seed, n_layers, 
     p2, c2 = viterbi(nodes, edges)
     assert c1 == pytest.approx(c2, rel=1e-12)
     assert p1 == p2
+    # split at single-mode layers (what the DAM runs), on the rectangular form
+    p3, c3 = astar_blocks(*pad_layers(nodes, edges))
+    assert c3 == pytest.approx(c2, rel=1e-12)
+    assert p3 == p2
 
 
 def test_astar_prefers_smoothness_when_data_terms_tie():

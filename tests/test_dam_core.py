@@ -170,7 +170,45 @@ def test_mstep_returns_no_worse_objective_and_positive_sigma():
     a = a.reshape(3, 3)
     r = y - fitted_values(occ, a, np.ones(3))[0]
     before = r @ r + 1e-6 * np.sum(a * a)
-    s, a2, after = gauss_newton_sigma(occ, y, a, np.ones(3), lam=1e-6, projected=True)
+    s, a2, after, _ = gauss_newton_sigma(occ, y, a, np.ones(3), lam=1e-6, projected=True, n_steps=3)
     assert after <= before and np.all(s > 0)
     r2 = y - fitted_values(occ, a2, s)[0]
     assert after == pytest.approx(r2 @ r2 + 1e-6 * np.sum(a2 * a2), rel=1e-10)
+
+
+# -- modes (Section V-A) -------------------------------------------------------------
+def test_resampling_reproduces_a_cubic_exactly():
+    from dam.modes import resample_occurrences
+    fr = 100.0
+    t = np.arange(60) / fr
+    traj = np.stack([1 + 2 * t - 3 * t ** 2 + 4 * t ** 3, -t], axis=1)
+    starts, ends = np.array([0.05, 0.213]), np.array([0.213, 0.4])
+    out = resample_occurrences(traj, fr, starts, ends, 7)
+    u = np.linspace(0, 1, 7)
+    for j in range(2):
+        tt = starts[j] + u * (ends[j] - starts[j])
+        np.testing.assert_allclose(out[j, :, 0], 1 + 2 * tt - 3 * tt ** 2 + 4 * tt ** 3, atol=1e-10)
+        np.testing.assert_allclose(out[j, :, 1], -tt, atol=1e-12)
+
+
+def test_cluster_modes_finds_separated_shapes_and_records_single_modes():
+    from dam.modes import cluster_modes
+    rng = np.random.default_rng(0)
+    up, down = np.linspace(0, 1, 10), np.linspace(1, 0, 10)
+    X = np.vstack([up + 0.01 * rng.normal(size=(12, 10)), down + 0.01 * rng.normal(size=(9, 10))])
+    res = cluster_modes(X, random_state=0)
+    assert res.n_modes == 2 and res.reason == ""
+    assert len(set(res.labels[:12])) == 1 and len(set(res.labels[12:])) == 1 and res.labels[0] != res.labels[12]
+    assert res.labels[0] == 0          # modes ordered by size: the larger cluster is mode 0
+    few = cluster_modes(X[:4], min_occurrences=6)
+    assert few.n_modes == 1 and "too few occurrences (4 < 6)" in few.reason
+    same = cluster_modes(np.ones((8, 10)))
+    assert same.n_modes == 1 and "identical" in same.reason
+    stuck = cluster_modes(rng.normal(size=(30, 10)), preference="median", max_iter=2, damping=0.99)
+    assert stuck.n_modes == 1 and "did not converge" in stuck.reason
+    single = cluster_modes(X, method="single")
+    assert single.n_modes == 1 and "single" in single.reason
+    # a tiny cluster is merged into its nearest neighbour
+    X3 = np.vstack([X, np.full((2, 10), 5.0)])
+    merged = cluster_modes(X3, min_mode_size=3, preference="median", random_state=0)
+    assert merged.labels[-1] == merged.labels[-2] and np.bincount(merged.labels).min() >= 3

@@ -152,3 +152,10 @@ def test_dilated_windows_hand_computation():
     np.testing.assert_array_equal(X[2], [0, 0, 1, 0, 1, 0, 1, 0, 0])  # frames 0, 2, 4: sil, p, aa
     Y = np.arange(7.0)[:, None]
     np.testing.assert_allclose(overlap_average(window_targets(Y, ky=5, dilation=3), 5, 1, dilation=3), Y)
+
+
+def test_guess_alphabet():
+    from dam.phonetics import guess_alphabet
+    assert guess_alphabet(["a:", "OY", "aI", "S", "sil"]) == "sampa"   # OY is SAMPA too
+    assert guess_alphabet(["AH0", "S", "N"]) == "arpabet"
+    assert guess_alphabet(["iy", "sh", "sil"]) == "arpabet"

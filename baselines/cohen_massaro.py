@@ -76,7 +76,7 @@ class _Design:
     same phone are merged first.
     """
 
-    __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone")
+    __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone", "present", "onehot")
 
     def __init__(self, alignment: Alignment, phone_rows: np.ndarray, frame_rate: float, n_frames: int,
                  stride: int = 1):
@@ -93,6 +93,10 @@ class _Design:
             self.log_abs_tau = np.where(self.abs_tau > 0, np.log(np.maximum(self.abs_tau, 1e-300)), 0.0)
         self.before = self.tau > 0
         self.phone = np.asarray(phone_rows, dtype=np.intp)
+        # the phones present, and which of them each segment is (for the Jacobian)
+        self.present, local = np.unique(self.phone, return_inverse=True)
+        self.onehot = np.zeros((len(self.phone), len(self.present)))
+        self.onehot[np.arange(len(self.phone)), local] = 1.0
 
 
 def _weights(design: _Design, log_alpha, theta_l, theta_r, c):
@@ -133,9 +137,7 @@ def _utterance_terms(params, d: _Design, y: np.ndarray, n_phones: int):
     w, tpow = _weights(d, la, th_l, th_r, c)
     Tseg = T[d.phone]
     F = w @ Tseg
-    present, local = np.unique(d.phone, return_inverse=True)
-    onehot = np.zeros((len(d.phone), len(present)))
-    onehot[np.arange(len(d.phone)), local] = 1.0
+    onehot = d.onehot
     # dF/dphi = sum_s w_s dlogD_s/dphi (T_s - F) for a dominance parameter phi.
     wdev = w * (Tseg[None, :] - F[:, None])
     J = np.hstack([w @ onehot,                                          # dF/dT_p
@@ -143,7 +145,7 @@ def _utterance_terms(params, d: _Design, y: np.ndarray, n_phones: int):
                    (wdev * -np.where(d.before, tpow, 0.0)) @ onehot,    # left rate, before the centre
                    (wdev * -np.where(d.before, 0.0, tpow)) @ onehot,    # right rate, after it
                    (wdev * -(tpow * c[d.phone] * d.log_abs_tau)) @ onehot])  # d|tau|^c/dlog c
-    cols = (np.arange(len(BLOCKS))[:, None] * n_phones + present[None, :]).ravel()
+    cols = (np.arange(len(BLOCKS))[:, None] * n_phones + d.present[None, :]).ravel()
     return F - y, J, cols
 
 

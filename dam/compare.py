@@ -161,6 +161,12 @@ class ComparisonResult:
                      "channels; 95% CI by bootstrap over utterances; Pearson r per channel, averaged; "
                      "p: two-sided paired Wilcoxon signed-rank test of per-utterance RMSE against the best "
                      "model, Holm-corrected.")
+        # The exact two-sided signed-rank test cannot go below 2 / 2^n; Holm multiplies the smallest p.
+        n_tests = sum(r["status"] == "ok" for r in self.summary) - 1
+        floor = min(1.0, n_tests * 2.0 / 2.0 ** n_utt) if n_utt else 1.0
+        if n_tests > 0 and floor > 0.05:
+            lines.append(f"With {n_utt} utterances and {n_tests} comparisons no Holm-corrected p can fall below "
+                         f"{floor:.2g}: use more test utterances or --cv for significance.")
         return "\n".join(lines)
 
     def write(self, out) -> list[str]:
@@ -295,8 +301,9 @@ def _run_task(label, name, params, estimator, fold, train, test, unknown_phone=N
         res["fit_seconds"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         res["predictions"] = model.predict(test.alignments)
-        times = [time.perf_counter() - t0]
-        while sum(times) < 1.0 and len(times) < 5:  # fast models: the median of a few runs is steadier
+        res["first_predict_seconds"] = time.perf_counter() - t0  # includes jit compilation (neural models)
+        times = []
+        while not times or (sum(times) < 1.0 and len(times) < 5):  # warm runs; their median is steadier
             t0 = time.perf_counter()
             model.predict(test.alignments)
             times.append(time.perf_counter() - t0)
@@ -383,7 +390,11 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
     bar = tqdm(total=len(tasks), desc="compare", unit="fit", file=sys.stderr,
                disable=not verbose or not sys.stderr.isatty())
     results = []
-    for r in Parallel(n_jobs=n_jobs, return_as="generator_unordered")(delayed(_run_task)(*t) for t in tasks):
+    try:
+        parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+    except ValueError:  # a backend without result generators (some Dask/Ray versions): results at the end
+        parallel = Parallel(n_jobs=n_jobs)
+    for r in parallel(delayed(_run_task)(*t) for t in tasks):
         results.append(r)
         bar.set_postfix_str(f"{r['model']} fold {r['fold']}: {r['status']}")
         bar.update(1)

@@ -161,8 +161,9 @@ def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray):
     ``base_b + mode(p) * w_b + m`` (entries of one mode's occurrences that meet
     in a frame add up, as in Eq. 7). A frame only meets the occurrences of its
     own utterance, so each utterance's block of ``Z`` is small and dense: it is
-    formed, multiplied by BLAS and added into the result. Several times faster
-    than a sparse ``Z.T @ Z``.
+    formed, multiplied by BLAS and added into the result.
+    ``benchmarks/bench_dam.py`` compares it with scipy's sparse ``Z.T @ Z``
+    (faster when the dominance reaches far, slower when it is short).
 
     Parameters
     ----------
@@ -190,21 +191,20 @@ def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray):
     u = utt[k]
     r0 = occ.offset[k]
     lm = local[k]
-    flat, wts, off = [], [], np.zeros(len(L), dtype=np.int64)
+    flat, off = [], np.zeros(len(L), dtype=np.int64)
     for vals, _ in blocks:
         w = vals.shape[1]
         flat.append(((row - r0) * width[u] + off[u] + lm * w)[:, None] + np.arange(w))
-        wts.append(vals)
         off = off + L * w
     flat = np.hstack(flat)
-    wts = np.hstack(wts)
-    bounds = np.searchsorted(k, occ.utterance_bounds)
+    wts = np.hstack([v for v, _ in blocks])
     key = tuple((v.shape[1], base) for v, base in blocks)
     cache = occ.__dict__.setdefault("_gram_columns", {})
     if key not in cache:   # global column of every local column, per utterance
         cache[key] = [np.concatenate([base + (m[:, None] * w + np.arange(w)).ravel() for w, base in key])
                       for m in modes_u]
     columns = cache[key]
+    bounds = np.searchsorted(k, occ.utterance_bounds)
     for ui, (p0, p1) in enumerate(zip(bounds[:-1], bounds[1:])):
         if p0 == p1:
             continue

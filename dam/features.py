@@ -32,7 +32,7 @@ Feature sets (``features``)
        :data:`dam.phonetics.TAYLOR_CATEGORIES`), plus one indicator "a consonant
        in frames ``c-h .. c-2`` or ``c+2 .. c+h``" (``c`` the centre,
        ``h = kx // 2``; the paper's ``c-5:c-2, c+2:c+5`` for ``kx = 11``);
-    3. transitions between adjacent frames ``j, j+1`` (``(kx - 1) * 13``):
+    3. transitions between adjacent frames ``j, j+1`` (``(kx - 1) * 16``):
        consonant+vowel pair clusters (2), vowel+consonant (3),
        consonant+consonant (3), consonant then a vowel starting with
        a/e/i/o/u (5), consonant then a vowel ending with h/w/y (3).
@@ -43,7 +43,13 @@ Feature sets (``features``)
     CV by whether the vowel is back/rounded; VC and CC by the place of the
     consonant, front/central/back); :func:`fit_transition_clusters` does what
     the paper did on a training corpus (k-means over the mean trajectory of
-    each pair type).
+    each pair type). Categories of German SAMPA phones are those of their
+    nearest ARPAbet phone (:func:`dam.phonetics.taylor_categories`). The
+    paper's /sp/ is silence here (``dam.data`` merges pause labels), so its
+    phone set has 40 entries and 2341 features.
+
+``dilation`` spaces the window frames ``dilation`` frames apart: the paper's
+11 frames at 29.97 frames/s span 0.37 s, which at 100 Hz takes dilation 3.
 """
 from __future__ import annotations
 

@@ -147,3 +147,15 @@ def test_synthesis_without_scipy_equals_with_scipy(monkeypatch):
 
     monkeypatch.setattr(builtins, "__import__", no_scipy)
     np.testing.assert_allclose(model.predict(a), with_scipy, rtol=1e-10, atol=1e-12)
+
+
+def test_concatenated_utterances_solve_as_separate_ones():
+    from baselines.mmm import _concatenated
+    rng = np.random.default_rng(2)
+    parts = []
+    for n in (7, 12, 5):
+        A = rng.uniform(0.5, 2, n)
+        parts.append((A, difference_gram_banded(n, 2), rng.normal(size=n)))
+    separate = np.concatenate([banded_cholesky_solve(mmm_system(A, g, 3.0), A * m) for A, g, m in parts])
+    (_, A, g, m), = _concatenated([(np.zeros(len(A), int), A, g, m) for A, g, m in parts])
+    np.testing.assert_allclose(banded_cholesky_solve(mmm_system(A, g, 3.0), A * m), separate, rtol=1e-12)

@@ -46,6 +46,8 @@ from .reference import PhoneMean
 __all__ = ["CohenMassaro", "dominance", "cohen_massaro_trajectory", "residuals_and_jacobian",
            "normal_equations", "levenberg_marquardt"]
 
+# Synthesis computes (frames x segments) weights this many values at a time.
+_BLOCK_VALUES = 2 ** 22
 # Parameter blocks of one channel, each of length n_phones, in this order.
 BLOCKS = ("target", "log_alpha", "log_theta_left", "log_theta_right", "log_c")
 
@@ -71,7 +73,8 @@ def dominance(tau, alpha, theta_left, theta_right, c):
 class _Design:
     """What the fit needs from one utterance: segment phones and centre-to-frame times.
 
-    ``tau`` has shape (n_frames, n_segments) (every ``stride``-th frame);
+    ``tau`` has shape (n_frames, n_segments) (every ``stride``-th frame
+    from ``start``);
     ``phone`` (n_segments,) indexes the phone table. Adjacent segments of the
     same phone are merged first.
     """
@@ -79,14 +82,14 @@ class _Design:
     __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone", "present", "onehot")
 
     def __init__(self, alignment: Alignment, phone_rows: np.ndarray, frame_rate: float, n_frames: int,
-                 stride: int = 1):
+                 stride: int = 1, start: int = 0):
         # Neighbouring segments of one phone (a pause cut in two) act as one segment.
         phone_rows = np.asarray(phone_rows)
         first = np.r_[True, phone_rows[1:] != phone_rows[:-1]]
         last = np.r_[first[1:], True]
         centres = 0.5 * (alignment.starts[first] + alignment.ends[last])
         phone_rows = phone_rows[first]
-        t = np.arange(0, n_frames, stride) / frame_rate
+        t = np.arange(start, n_frames, stride) / frame_rate
         self.tau = centres[None, :] - t[:, None]
         self.abs_tau = np.abs(self.tau)
         with np.errstate(divide="ignore"):
@@ -366,11 +369,15 @@ class CohenMassaro(Synthesizer):
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         index = {p: i for i, p in enumerate(self.phone_counts_)}
         rows = np.array([index[p] for p in self._known_labels(alignment, self.unknown_phone)])
-        d = _Design(alignment, rows, self.frame_rate_, n_frames)
         out = np.empty((n_frames, len(self.channels_)))
-        for ch in range(len(self.channels_)):
-            out[:, ch] = cohen_massaro_trajectory(d, self.target_[:, ch], np.log(self.alpha_[:, ch]),
-                                                  self.theta_left_[:, ch], self.theta_right_[:, ch],
-                                                  self.c_[:, ch])
+        log_alpha = np.log(self.alpha_)
+        # Every segment reaches every frame: blocks of frames bound the memory of a long recording.
+        block = max(1, _BLOCK_VALUES // max(len(alignment), 1))
+        for start in range(0, n_frames, block):
+            d = _Design(alignment, rows, self.frame_rate_, min(start + block, n_frames), start=start)
+            for ch in range(len(self.channels_)):
+                out[start:start + block, ch] = cohen_massaro_trajectory(
+                    d, self.target_[:, ch], log_alpha[:, ch], self.theta_left_[:, ch], self.theta_right_[:, ch],
+                    self.c_[:, ch])
         return out
 

@@ -330,8 +330,9 @@ def save_corpus(corpus: Corpus, directory, *, alignment_format: str = "TextGrid"
     meta = {"frame_rate": corpus.frame_rate, "channels": list(corpus.channels)}
     if corpus.name:
         meta["name"] = corpus.name
-    meta.update(corpus.metadata)
-    meta.update(metadata or {})
+    # frame_rate and channels describe the files written here: metadata may not override them.
+    meta.update({k: v for k, v in {**corpus.metadata, **(metadata or {})}.items()
+                 if k not in ("frame_rate", "channels")})
     (d / "corpus.json").write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
     for k, u in enumerate(corpus):
         if u.name is None:

@@ -153,3 +153,12 @@ def test_levenberg_marquardt_matches_scipy_on_a_bounded_problem():
     np.testing.assert_allclose(ours, ref.x, rtol=1e-5)
     assert ours[2] == pytest.approx(0.6)
     assert cost == pytest.approx(2 * ref.cost, rel=1e-8)
+
+
+def test_long_recordings_are_synthesised_in_blocks_identically(monkeypatch):
+    import baselines.cohen_massaro as cm
+    model = CohenMassaro(max_nfev=5).fit(_generated_corpus(n_utts=3))
+    a = _generated_corpus(n_utts=1, seed=4)[0].alignment
+    whole = model.predict(a)
+    monkeypatch.setattr(cm, "_BLOCK_VALUES", 5 * len(a))  # blocks of 5 frames
+    np.testing.assert_allclose(model.predict(a), whole, rtol=1e-12)

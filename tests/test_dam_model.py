@@ -213,3 +213,14 @@ def test_synthetic_generator_is_deterministic_and_renders_the_model():
         np.testing.assert_array_equal(u.trajectory, true.predict(u.alignment))
     a = random_alignment(np.random.default_rng(0), ["a", "b"], n_segments=5, durations={"a": (0.1, 0.1), "b": (0.2, 0.2)})
     assert len(a) == 5 and all(abs(d - {"a": 0.1, "b": 0.2}[p]) < 1e-12 for p, d in zip(a.labels, a.durations))
+
+
+def test_cli_inspect_prints_the_report(tmp_path, capsys):
+    from dam.cli import main
+    m = _two_mode_truth()
+    m.save(tmp_path / "m.dam")
+    assert main(["inspect", str(tmp_path / "m.dam"), "--phone", "a"]) == 0
+    out = capsys.readouterr().out
+    assert "4 phones, 5 modes, 2 channels" in out
+    assert "phone 'a': 2 mode(s)" in out and "a^0..a^M=[-1.  2.  0.]" in out
+    assert main(["inspect", str(tmp_path / "missing.dam")]) == 1

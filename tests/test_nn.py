@@ -157,6 +157,27 @@ def test_bidirectional_state_ignores_padding(small):
     np.testing.assert_allclose(outs[0], outs[1], rtol=0, atol=1e-5)
 
 
+@pytest.mark.parametrize("cell", ["gru", "lstm"])
+def test_recurrent_layer_equals_equinox_cell_step_by_step(cell):
+    import equinox as eqx
+    import jax
+    from baselines.nn.rnn import run_recurrent_layer
+    make = eqx.nn.GRUCell if cell == "gru" else eqx.nn.LSTMCell
+    c = make(3, 5, key=jax.random.key(1))
+    xs = np.random.default_rng(0).standard_normal((7, 3)).astype(np.float32)
+    mask = np.array([1, 1, 1, 1, 1, 0, 0], bool)
+    for reverse in (False, True):
+        state = np.zeros(5, np.float32) if cell == "gru" else (np.zeros(5, np.float32),) * 2
+        expected = np.zeros((7, 5))
+        order = range(6, -1, -1) if reverse else range(7)
+        for t in order:  # the library's own cell, one frame at a time; padding leaves the state alone
+            if mask[t]:
+                state = c(xs[t], state)
+            expected[t] = state if cell == "gru" else state[0]
+        got = np.asarray(run_recurrent_layer(c, xs, mask, reverse=reverse))
+        np.testing.assert_allclose(got, expected, rtol=1e-5, atol=1e-6)
+
+
 @pytest.mark.parametrize("name", ["sliding-dnn", "transformer"])
 def test_prediction_is_the_hand_average_of_overlapping_windows(name, small):
     from baselines.nn.train import predict_padded

@@ -8,9 +8,9 @@ encoder features (:mod:`baselines.nn.encoders`), each layer's forward and
 (when ``bidirectional``) backward outputs concatenated, dropout between
 layers, and a linear layer from the last hidden state to the channels.
 
-Training reads windows of ``seq_len`` frames cut from the utterances with
-50% overlap (the paper samples 300 ms windows at random); synthesis runs
-over the whole utterance. A unidirectional decoder is causal: its output at
+Training reads windows of ``seq_len`` frames that tile the utterances (the
+paper samples 300 ms windows at random; shuffling the windows every epoch
+does the same); synthesis runs over the whole utterance. A unidirectional decoder is causal: its output at
 a frame never depends on later frames (the latency of one frame the paper
 reports). Padding added for batching is masked: the recurrent state is held
 on padded frames, so the backward direction starts at the utterance's last
@@ -35,7 +35,12 @@ _CELLS = {"gru": eqx.nn.GRUCell, "lstm": eqx.nn.LSTMCell}
 
 
 def run_recurrent_layer(cell, xs, mask, *, reverse: bool = False):
-    """Scan ``cell`` over a sequence, holding the state on masked frames.
+    """Run ``cell`` over a sequence, holding the state on masked frames.
+
+    The update is that of ``cell`` (equinox's GRUCell or LSTMCell, same
+    equations and weights), with the input projection of all frames done in
+    one matrix product before the scan: only the recurrent product stays in
+    the sequential loop.
 
     Parameters
     ----------
@@ -51,17 +56,31 @@ def run_recurrent_layer(cell, xs, mask, *, reverse: bool = False):
     array, shape (length, hidden_size)
         The hidden state after each frame (in the original frame order).
     """
-    zeros = jnp.zeros(cell.hidden_size, xs.dtype)
-    lstm = isinstance(cell, eqx.nn.LSTMCell)
-    init = (zeros, zeros) if lstm else zeros
+    sig, tanh = jax.nn.sigmoid, jnp.tanh
+    proj = xs @ cell.weight_ih.T + cell.bias  # (length, 3 or 4 x hidden)
+    zeros = jnp.zeros(cell.hidden_size, proj.dtype)
+    if isinstance(cell, eqx.nn.LSTMCell):
+        def update(state, p):
+            h, c = state
+            i, f, g, o = jnp.split(p + cell.weight_hh @ h, 4)
+            c = sig(f) * c + sig(i) * tanh(g)
+            return sig(o) * tanh(c), c
+        init = (zeros, zeros)
+    else:
+        def update(h, p):
+            ir, iz, i_n = jnp.split(p, 3)
+            hr, hz, hn = jnp.split(cell.weight_hh @ h, 3)
+            reset, inp = sig(ir + hr), sig(iz + hz)
+            new = tanh(i_n + reset * (hn + cell.bias_n))
+            return new + inp * (h - new)
+        init = zeros
 
-    def step(state, x_m):
-        x, m = x_m
-        new = cell(x, state)
-        state = jax.tree_util.tree_map(lambda a, b: jnp.where(m, a, b), new, state)
-        return state, (state[0] if lstm else state)
+    def step(state, p_m):
+        p, m = p_m
+        state = jax.tree_util.tree_map(lambda a, b: jnp.where(m, a, b), update(state, p), state)
+        return state, (state[0] if isinstance(state, tuple) else state)
 
-    _, out = jax.lax.scan(step, init, (xs, mask), reverse=reverse)
+    _, out = jax.lax.scan(step, init, (proj, mask), reverse=reverse)
     return out
 
 
@@ -109,12 +128,11 @@ class RecurrentNet(eqx.Module):
 
 
 def sequence_windows(n_frames: int, length: int) -> np.ndarray:
-    """Start frames of training windows of ``length`` frames with 50% overlap,
-    the last one ending at the utterance's end, shape (n_windows,)."""
+    """Start frames of training windows of ``length`` frames that tile the
+    utterance, the last one ending at its end, shape (n_windows,)."""
     if n_frames <= length:
         return np.array([0])
-    hop = max(1, length // 2)
-    starts = np.arange(0, n_frames - length + 1, hop)
+    starts = np.arange(0, n_frames - length + 1, length)
     if starts[-1] != n_frames - length:
         starts = np.append(starts, n_frames - length)
     return starts

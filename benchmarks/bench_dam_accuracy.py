@@ -44,7 +44,11 @@ VARIANTS = [
 
 
 def split(name: str):
-    """The corpus's own train/test splits, or a 75/25 utterance split."""
+    """The corpus's own train/test splits (bundled, or ``train/`` and ``test/`` of a directory),
+    or a 75/25 utterance split."""
+    if os.path.isdir(name):
+        from dam.io import load_corpus
+        return load_corpus(os.path.join(name, "train")), load_corpus(os.path.join(name, "test"))
     try:
         return dam.datasets.load(name, "train"), dam.datasets.load(name, "test")
     except KeyError:
@@ -64,7 +68,7 @@ def per_phone_sq(model, corpus):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--corpus", default="tiny")
+    ap.add_argument("--corpus", default="tiny", help="bundled corpus name, or a directory with train/ and test/")
     ap.add_argument("--quick", action="store_true", help="only phone-mean, dam-m0 and dam")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)

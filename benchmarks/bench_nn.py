@@ -50,7 +50,7 @@ MODELS = {
     "causal-mlp": ("causal-mlp", {}),
     "gru": ("gru", {}),
     "gru-1L": ("gru", {"n_layers": 1}),
-    "bi-gru-5L": ("gru", {"n_layers": 5, "bidirectional": True}),
+    "bi-gru-5L": ("gru", {"n_layers": 5, "bidirectional": True, "hidden_size": 32, "max_epochs": 20}),
     "transformer": ("transformer", {}),
 }
 PAPERS = {"taylor2017_frames_per_second": 1000.0, "medina2022_ms_per_second_mlp": 0.232,

@@ -100,6 +100,19 @@ def test_htk_lab_units(tmp_path):
     p.write_text("hello world\n")
     with pytest.raises(DataError, match="line 1"):
         read_lab(p)
+    p.write_text("0.0 0.1 sil\n0.1 0.2 p\n")  # seconds in an HTK file: refused, not guessed
+    with pytest.raises(DataError, match="line 1 times.*integers in 100 ns"):
+        read_lab(p)
+
+
+def test_xwaves_lab_in_seconds(tmp_path):
+    p = tmp_path / "mocha.lab"
+    p.write_text("signal msak0_001\nnfields 1\n#\n    0.0000 125 h#\n    0.1175 125 breath\n"
+                 "    0.2350 125 sil\n    0.3100 125 dh\n")
+    a = read_lab(p)
+    assert a.labels == ("breath", "sil", "dh")
+    np.testing.assert_allclose(a.starts, [0, 0.1175, 0.235])
+    np.testing.assert_allclose(a.ends, [0.1175, 0.235, 0.31])
 
 
 def test_writers_round_trip(tmp_path):

@@ -107,13 +107,13 @@ class TransformerDecoder(NeuralSynthesizer):
         Width of the tokens (a multiple of ``n_heads``).
     d_ff : int, default 128
         Width of the feed-forward layers.
-    window_hop : int, default 3
-        Train on every ``window_hop``-th window.
+    window_hop : int, default 5
+        Train on every ``window_hop``-th window (each frame is still in 3 of them).
     dropout : float, default 0.1
     optimizer : {"adam", "sgd"}, default "adam"
     learning_rate : float, default 1e-3
     batch_size : int, default 64
-    max_epochs : int, default 30
+    max_epochs : int, default 20
     patience : int, default 4
     validation_fraction : float, default 0.1
     encoder, random_state, verbose, unknown_phone
@@ -123,8 +123,8 @@ class TransformerDecoder(NeuralSynthesizer):
     name = "transformer"
 
     def __init__(self, *, window: int = 15, n_layers: int = 4, n_heads: int = 8, d_model: int = 64,
-                 d_ff: int = 128, window_hop: int = 3, dropout: float = 0.1, optimizer: str = "adam",
-                 learning_rate: float = 1e-3, batch_size: int = 64, max_epochs: int = 30, patience: int = 4,
+                 d_ff: int = 128, window_hop: int = 5, dropout: float = 0.1, optimizer: str = "adam",
+                 learning_rate: float = 1e-3, batch_size: int = 64, max_epochs: int = 20, patience: int = 4,
                  validation_fraction: float = 0.1, encoder: str = "phones", random_state: int | None = 0,
                  verbose: int = 1, unknown_phone: str = "error"):
         self.window = window

@@ -54,7 +54,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..data import SILENCE, Alignment, Corpus, DataError, Utterance
+from ..data import Alignment, Corpus, DataError, Utterance
 
 __all__ = [
     "VTL_CHANNELS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",

@@ -2,13 +2,13 @@
 
 Fits on the training part of a bundled corpus (its ``train`` split, or 75% of
 the utterances), scores on the held-out part (its ``test`` split, or the other
-25%), and writes ``benchmarks/results/dam_accuracy.json`` and ``.md``:
+25%), and writes ``benchmarks/results/dam_accuracy_<corpus>.json`` and ``.md``:
 overall and per-channel RMSE, mean Pearson r, fit seconds, and per phone the
 RMSE of the DAM against dam-m0 on the frames of that phone (where the DAM
 loses). The paper reports average L2 norms of 0.4724 (DAM) vs 0.6297
 (Cohen-Massaro) on one utterance.
 
-    python benchmarks/bench_dam_accuracy.py [--corpus tiny] [--quick]
+    python benchmarks/bench_dam_accuracy.py [--corpus tiny|vtl|DIR] [--quick] [--variants LABEL ...]
 """
 from __future__ import annotations
 
@@ -39,6 +39,7 @@ VARIANTS = [
     ("dam single-mode", "dam", {"modes": "single"}),
     ("dam hold single-mode", "dam", {"extrapolate": "hold", "modes": "single"}),
     ("dam normalize", "dam", {"normalize": True}),
+    ("dam-m0 normalize", "dam-m0", {"normalize": True}),
     ("dam-m0 single-mode", "dam-m0", {"modes": "single"}),
 ]
 
@@ -70,13 +71,18 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default="tiny", help="bundled corpus name, or a directory with train/ and test/")
     ap.add_argument("--quick", action="store_true", help="only phone-mean, dam-m0 and dam")
+    ap.add_argument("--variants", nargs="+", default=None,
+                    help="labels of the variants to run (phone-mean, dam-m0 and dam always run)")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)
     train, test = split(args.corpus)
     res = {"machine": machine(), "corpus": args.corpus, "train": repr(train), "test": repr(test),
            "channels": list(train.channels), "models": {}}
     per_phone = {}
-    for label, name, params in (VARIANTS[:3] if args.quick else VARIANTS):
+    chosen = VARIANTS[:3] if args.quick else VARIANTS
+    if args.variants:
+        chosen = VARIANTS[:3] + [v for v in VARIANTS[3:] if v[0] in args.variants]
+    for label, name, params in chosen:
         t0 = time.perf_counter()
         model = dam.make(name, **params).fit(train)
         fit_s = time.perf_counter() - t0
@@ -96,9 +102,10 @@ def main(argv=None):
                             "paper_ratio": 0.4724 / 0.6297}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "dam_accuracy.json").write_text(json.dumps(res, indent=2))
-    (out / "dam_accuracy.md").write_text(_markdown(res))
-    print(f"wrote {out / 'dam_accuracy.json'} and .md", file=sys.stderr)
+    stem = "dam_accuracy_" + Path(args.corpus.rstrip("/")).name
+    (out / f"{stem}.json").write_text(json.dumps(res, indent=2))
+    (out / f"{stem}.md").write_text(_markdown(res))
+    print(f"wrote {out / stem}.json and .md", file=sys.stderr)
 
 
 def _markdown(r) -> str:

@@ -4,7 +4,11 @@ Per channel (the paper trains "per control"): start with every sigma at
 ``sigma_init``; E-step (animeme coefficients by least squares, Eq. 5);
 then repeat M-step (sigmas by damped Gauss-Newton, Eq. 9) and E-step until
 the relative improvement of the objective falls below ``tol`` or
-``max_iter`` iterations have run.
+``max_iter`` iterations have run. By default the M-step is the
+variable-projection form of the Gauss-Newton step (the sigma step accounts
+for how the E-step will move the animemes, and the E-step is solved inside
+it); ``projected=False`` is the paper's step with the animemes frozen, which
+needs many more iterations (see :func:`dam.mstep.gauss_newton_sigma`).
 
 The objective is ``sum_i f_i^2 + lambda ||a||^2`` (Eq. 4 plus the ridge, with
 ``lambda`` fixed for the whole fit), divided by the number of frames. Both

@@ -111,6 +111,22 @@ class DAM(Synthesizer):
         Standard deviation of every channel in training.
     time_scale_ : float
         Median training phone duration (seconds), the time unit of ``E_s``.
+
+    Notes
+    -----
+    Where the paper is vague, :mod:`dam.em`, :mod:`dam.mstep` and
+    :mod:`dam.astar` say what was decided. Two empirical findings
+    (``benchmarks/bench_dam_accuracy.py``):
+
+    * With the plain sum (Eq. 2 as printed) the dominance is 1 on the closed
+      interval [0, 1], so at a boundary both neighbours count in full; with
+      constant animemes (``dam-m0``) the output doubles there. Where
+      boundaries fall on frame times (the VocalTractLab corpus) the plain-sum
+      models lose even to ``phone-mean`` on held-out data, while
+      ``normalize=True`` beats it clearly.
+    * With ``extrapolate="polynomial"`` the objective has local minima (the
+      polynomial tails can stand in for the dominance); with ``"hold"``
+      parameters generated with known values are recovered from any start.
     """
 
     name = "dam"

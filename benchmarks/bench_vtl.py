@@ -28,7 +28,10 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _machine import machine  # noqa: E402
+
+from dam.datasets.vtl import PhrasePlan, import_vtl, segment_file_text  # noqa: E402
 
 
 def cpu_median(fn, repeat: int) -> float:
@@ -46,7 +49,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)
-    import vocaltractlab_cython as vtl
+    vtl = import_vtl()
 
     # Two phrases of the same length: vowels, fricatives and /l/ only, and the
     # same with four of the segments turned into closures (m, t, k, b).
@@ -60,8 +63,9 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         def files(name, segs):
             seg, ges = os.path.join(tmp, f"{name}.seg"), os.path.join(tmp, f"{name}.ges")
-            with open(seg, "w") as fh:
-                fh.writelines(f"name = {n}; duration_s = {d:.6f};\n" for n, d in segs)
+            labels, durations = zip(*segs)
+            with open(seg, "w", encoding="utf-8") as fh:
+                fh.write(segment_file_text(PhrasePlan(name, (), labels, durations, (), 1.0, False)))
             return seg, ges
 
         seg_p, ges_p = files("plain", plain)

@@ -30,11 +30,9 @@ def _save_matrix(arr, path) -> None:
 def _name_file(args, exc, fields: dict) -> None:
     """Put the file a bad matrix came from into a DataError raised without a source."""
     from .data import DataError
-    if isinstance(exc, DataError) and exc.source is None:
-        path = getattr(args, fields.get(str(exc.field).split("[")[0], ""), None)
-        if path:
-            exc.source = path
-            exc.args = (str(exc).replace("<input>", str(path), 1),)
+    from .rig import name_source
+    if isinstance(exc, DataError):
+        name_source(exc, getattr(args, fields.get(str(exc.field).split("[")[0], ""), None))
 
 
 def _with_files(**fields):
@@ -95,6 +93,8 @@ def _write(args, corpus, what: str) -> None:
     if args.output:
         save_corpus(corpus, args.output, trajectory_format=args.format)
         _info(args, f"wrote {what} {corpus!r} to {args.output}")
+    else:
+        _info(args, f"{what} computed but not written: give -o OUT_DIR")
 
 
 # -- crossmap ---------------------------------------------------------------
@@ -213,6 +213,8 @@ def cmd_retarget(args) -> int:
     from .data import DataError
     from .retarget import RigSpaceRetargeter
     from .rig import load_matrix
+    if not args.sigma > 0:
+        raise DataError(None, "--sigma", args.sigma, "must be a positive number of standard deviations")
     reference = _load(args, args.reference)
     if (args.rig_poses is None) != (args.rig_neutral is None):
         raise DataError(None, "--rig-poses" if args.rig_poses is None else "--rig-neutral", None,
@@ -230,11 +232,7 @@ def cmd_retarget(args) -> int:
         _info(args, f"wrote {2 * args.n_modes} reference poses to {args.save_poses}")
     if args.rig_poses is not None:
         data = reference if args.input is None else _load(args, args.input)
-        out = rt.transform(data)
-        if args.output:
-            _write(args, out, "rig parameters")
-        else:
-            _info(args, "rig parameters computed but not written: give -o OUT_DIR")
+        _write(args, rt.transform(data), "rig parameters")
     elif args.output:
         raise DataError(None, "--rig-poses", None, "-o needs the artist's rig poses (--rig-poses, --rig-neutral)")
     return 0

@@ -317,21 +317,32 @@ class CrossMapper(BaseEstimator, TransformerMixin):
             from .base import NotFittedError
             raise NotFittedError("this CrossMapper is not fitted yet; call fit(captured) first")
 
-    def weights(self, X):
-        """Blend weights per frame, shape (n_frames, n_key_shapes), container kept."""
+    def weights(self, X, *, names=None):
+        """Blend weights per frame, shape (n_frames, n_key_shapes), container kept.
+
+        ``names`` are the output channels, default ``key0, key1, ...``.
+        """
         self._check_fitted()
-        names = [f"key{k}" for k in range(len(self.key_shapes_))]
+        K = len(self.key_shapes_)
+        names = [f"key{k}" for k in range(K)] if names is None else list(names)
+        if len(names) != K:
+            raise DataError(None, "control_names", len(names), f"expected {K} names, one per key shape")
         return map_trajectories(X, lambda F: blend_weights(F, self.key_shapes_), names)
 
-    def vertices(self, X):
-        """Blended target vertices per frame, shape (n_frames, n_target_dims), container kept."""
-        self._check_fitted()
+    def _target_key_shapes(self) -> np.ndarray:
+        """``target_key_shapes`` checked against the fitted key shapes, shape (n_key_shapes, n_target_dims)."""
         if self.target_key_shapes is None:
             raise DataError(None, "target_key_shapes", None, "not set; pose the key shapes on the target first")
         V = check_frames(self.target_key_shapes, "target_key_shapes")
         if len(V) != len(self.key_shapes_):
             raise DataError(None, "target_key_shapes", V.shape,
                             f"needs one row per key shape ({len(self.key_shapes_)})")
+        return V
+
+    def vertices(self, X):
+        """Blended target vertices per frame, shape (n_frames, n_target_dims), container kept."""
+        self._check_fitted()
+        V = self._target_key_shapes()
         names = [f"v{k}" for k in range(V.shape[1])]
         return map_trajectories(X, lambda F: blend_vertices(blend_weights(F, self.key_shapes_), V), names)
 
@@ -352,17 +363,11 @@ class CrossMapper(BaseEstimator, TransformerMixin):
         """
         self._check_fitted()
         if self.target_key_shapes is None:
-            if self.control_names is None:
-                return self.weights(X)
-            return map_trajectories(X, lambda F: blend_weights(F, self.key_shapes_),
-                                    self._output_names(len(self.key_shapes_)))
+            return self.weights(X, names=self.control_names)
         if self.rig is None:
             raise DataError(None, "rig", None, "target_key_shapes are set but no rig to fit controls to; "
                             "use vertices() for the blended vertices")
-        V = check_frames(self.target_key_shapes, "target_key_shapes")
-        if len(V) != len(self.key_shapes_):
-            raise DataError(None, "target_key_shapes", V.shape,
-                            f"needs one row per key shape ({len(self.key_shapes_)})")
+        V = self._target_key_shapes()
         _, _, n = as_rig(self.rig, self.n_controls)
 
         def fn(F):

@@ -36,7 +36,7 @@ import numpy as np
 
 from .data import DataError
 
-__all__ = ["EstTrack", "read_est", "write_est", "read_est_trajectory", "BYTE_ORDERS"]
+__all__ = ["EstTrack", "read_est", "write_est", "read_est_trajectory", "stored_frame_rate", "BYTE_ORDERS"]
 
 #: EST ByteOrder code -> numpy byte-order character.
 BYTE_ORDERS = {"01": "<", "10": ">"}
@@ -256,4 +256,26 @@ def read_est_trajectory(path) -> tuple[np.ndarray, list | None, float | None]:
                         "interpolate across breaks before loading")
     from .io import frame_rate_from_times
     fr = frame_rate_from_times(track.times, path, where="time (frame {})", first=0)
-    return track.values, track.channels, None if fr is None else round(fr, 6)
+    return track.values, track.channels, None if fr is None else stored_frame_rate(track.times)
+
+
+def stored_frame_rate(times) -> float:
+    """The frame rate that float32 (binary) or 6-decimal (ASCII) frame times were written from.
+
+    Times stored this coarsely put ``1 / median(diff)`` off by up to 1e-5
+    relative, differently in every file, so two tracks of one 200 Hz corpus
+    would disagree about their rate. This returns the rate with the fewest
+    significant digits whose frame times ``i / rate`` match ``times`` within
+    their storage precision (200.0, not 200.000191), and the best estimate
+    ``(n - 1) / (t[-1] - t[0])`` if none does.
+    """
+    t = np.asarray(times, dtype=float)
+    best = (len(t) - 1) / (t[-1] - t[0])
+    # float32 rounding (a few ulps, EST may accumulate in float) or the ASCII writer's 6 decimals.
+    tol = 8 * np.finfo(np.float32).eps * float(np.max(np.abs(t))) + 1e-6
+    i = np.arange(len(t))
+    for digits in range(1, 13):
+        rate = float(f"{best:.{digits}g}")
+        if np.max(np.abs(i / rate - t)) <= tol:
+            return rate
+    return best

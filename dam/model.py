@@ -121,9 +121,12 @@ class DAM(Synthesizer):
     * With the plain sum (Eq. 2 as printed) the dominance is 1 on the closed
       interval [0, 1], so at a boundary both neighbours count in full; with
       constant animemes (``dam-m0``) the output doubles there. Where
-      boundaries fall on frame times (the VocalTractLab corpus) the plain-sum
-      models lose even to ``phone-mean`` on held-out data, while
-      ``normalize=True`` beats it clearly.
+      boundaries fall on frame times (the bundled ``vtl`` corpus) the
+      plain-sum models lose even to ``phone-mean`` on held-out data (RMSE
+      0.414 for the DAM, 0.444 dam-m0, 0.310 phone-mean), while
+      ``normalize=True`` beats it clearly (0.236; dam-m0 0.237). On ``tiny``
+      the DAM beats dam-m0 either way (0.072 vs 0.116 plain, 0.059 vs 0.106
+      normalized).
     * With ``extrapolate="polynomial"`` the objective has local minima (the
       polynomial tails can stand in for the dominance); with ``"hold"``
       parameters generated with known values are recovered from any start.

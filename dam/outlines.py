@@ -23,6 +23,7 @@ from typing import Sequence
 import numpy as np
 
 from .data import Corpus, DataError
+from .datasets.vtl import VTL_CHANNELS, import_vtl
 from .rig import LinearRig, check_frames, map_trajectories
 
 __all__ = ["CONTOURS", "TOY_CONTROLS", "resample_contour", "outline_channels", "tract_outlines",
@@ -42,15 +43,6 @@ TOY_CONTROLS = {
     "tip_up": ("tt-alveolar-closure(a)", "a"),
     "dorsum_up": ("tb-velar-closure(a)", "a"),
 }
-
-
-def _vtl():
-    try:
-        import vocaltractlab_cython as vtl
-    except ImportError as exc:  # pragma: no cover - depends on the install
-        raise ImportError("vocal-tract outlines need VocalTractLab: pip install 'dam[vtl]' "
-                          f"(vocaltractlab-cython); import failed: {exc}") from None
-    return vtl
 
 
 def resample_contour(points, n_points: int) -> np.ndarray:
@@ -125,7 +117,7 @@ def tract_outlines(states, *, contours: Sequence[str] = CONTOURS, n_points: int 
     ndarray, shape (n_frames, len(contours) * n_points * 2)
         Columns as in :func:`outline_channels` (centimetres).
     """
-    vtl = _vtl()
+    vtl = import_vtl()
     contours = _check_contours(contours)
     n_params = vtl.get_constants()["n_tract_params"]
     X = check_frames(states, "states", n_dims=n_params, dims_name="VTL's number of tract parameters")
@@ -155,7 +147,6 @@ def outline_corpus(corpus: Corpus, *, contours: Sequence[str] = CONTOURS, n_poin
     :func:`outline_channels`. The corpus's channels must be VTL's 19 tract
     parameters (in any order).
     """
-    from .datasets.vtl import VTL_CHANNELS
     missing = [c for c in VTL_CHANNELS if c not in corpus.channels]
     if missing:
         raise DataError(corpus.source, "channels", list(corpus.channels),
@@ -171,7 +162,7 @@ def outline_corpus(corpus: Corpus, *, contours: Sequence[str] = CONTOURS, n_poin
 
 def vtl_shape(name: str) -> np.ndarray:
     """The tract state (19,) of one of the speaker's stock shapes (``"a"``, ``"i"``, ``"tt-alveolar-closure(a)"``...)."""
-    vtl = _vtl()
+    vtl = import_vtl()
     try:
         return np.asarray(vtl.get_shape(name, "tract"), dtype=float)
     except Exception as exc:

@@ -23,7 +23,8 @@ import numpy as np
 
 from .data import Corpus, DataError, Utterance
 
-__all__ = ["LinearRig", "as_rig", "check_frames", "check_bounds", "map_trajectories", "stack_frames"]
+__all__ = ["LinearRig", "as_rig", "check_frames", "check_bounds", "map_trajectories", "stack_frames",
+           "load_matrix", "name_source"]
 
 
 def check_frames(X, field: str, *, n_dims: int | None = None, source: str | None = None,
@@ -75,8 +76,9 @@ def stack_frames(X, field: str = "X") -> np.ndarray:
         return np.concatenate(X.trajectories, axis=0)
     if isinstance(X, Utterance):
         return X.trajectory
-    if isinstance(X, (list, tuple)) and X and not np.isscalar(X[0]) and np.ndim(X[0]) >= 1 \
-            and (isinstance(X[0], (Utterance, Corpus)) or np.ndim(X[0]) == 2):
+    # np.ndim of an Utterance is 0: test the containers by type first.
+    if isinstance(X, (list, tuple)) and X and all(isinstance(x, (Utterance, Corpus)) or np.ndim(x) == 2
+                                                  for x in X):
         return np.concatenate([stack_frames(x, f"{field}[{k}]") for k, x in enumerate(X)], axis=0)
     return check_frames(X, field)
 
@@ -174,8 +176,7 @@ class LinearRig:
         try:
             return cls(neutral, deltas, **kw)
         except DataError as exc:
-            raise DataError(f"{deltas_path}" + (f", {neutral_path}" if neutral_path else ""),
-                            exc.field, exc.value, str(exc).split(": ", 2)[-1]) from None
+            raise name_source(exc, f"{deltas_path}" + (f", {neutral_path}" if neutral_path else ""))
 
 
 def as_rig(rig, n_controls: int | None = None, *, count_name: str = "n_controls"):
@@ -197,6 +198,14 @@ def as_rig(rig, n_controls: int | None = None, *, count_name: str = "n_controls"
     deltas = check_frames(rig, "rig")
     lin = LinearRig(np.zeros(deltas.shape[1]), deltas)
     return lin, lin, lin.n_controls
+
+
+def name_source(exc: DataError, source) -> DataError:
+    """Name ``source`` (a file) in a DataError raised before the file was known; returns ``exc``."""
+    if exc.source is None and source:
+        exc.source = str(source)
+        exc.args = (str(exc).replace("<input>", str(source), 1),)
+    return exc
 
 
 def load_matrix(path: str, field: str) -> np.ndarray:

@@ -86,28 +86,20 @@ def tract_corpora(minutes: float, cache: str, seed: int = 0) -> tuple[Corpus, Co
             n += 1
         log(f"captured motion: bundled vtl corpus, {n} training phrases ({total:.0f} s)")
         return train[:n], test[:1]
-    from dam.io import load_corpus, save_corpus
-    paths = [os.path.join(cache, f"vtl-{minutes:g}min-seed{seed}", s) for s in ("train", "test")]
+    from dam.datasets.vtl import generate_vtl_corpus
+    from dam.io import load_corpus
+    root = os.path.join(cache, f"vtl-{minutes:g}min-seed{seed}")
+    paths = [os.path.join(root, s) for s in ("train", "test")]
     if all(os.path.exists(os.path.join(p, "corpus.json")) for p in paths):
-        log(f"captured motion: cached VTL phrases in {os.path.dirname(paths[0])}")
-        return load_corpus(paths[0]), load_corpus(paths[1])
-    from dam.datasets.vtl import VTL_CHANNELS, load_lexicon, plan_phrases, split_words, synthesize_phrase
-    rng = np.random.default_rng(seed)
-    train_words, test_words = split_words(load_lexicon(), 0.2, rng)
-    out = []
-    for split, words, mins in (("train", train_words, minutes), ("test", test_words, 0.05)):
-        plans = plan_phrases(words, minutes=mins, rng=rng, prefix=split)
-        log(f"captured motion: synthesizing {len(plans)} {split} phrases with VocalTractLab ...")
-        utts = []
-        for p in plans:
-            r = synthesize_phrase(p, frame_rate=100.0)
-            utts.append(dam.Utterance(r["alignment"], r["trajectory"], 100.0, VTL_CHANNELS, name=r["name"]))
-        corpus = Corpus(utts, name=f"vtl-{split}")
-        save_corpus(corpus, paths[len(out)], trajectory_format="npy")
-        with open(os.path.join(cache, ".gitignore"), "w") as fh:   # a cache, not a result: keep it out of git
-            fh.write("*\n")
-        out.append(corpus)
-    return out[0], out[1][:1]
+        log(f"captured motion: cached VTL phrases in {root}")
+        return load_corpus(paths[0]), load_corpus(paths[1])[:1]
+    os.makedirs(cache, exist_ok=True)
+    with open(os.path.join(cache, ".gitignore"), "w") as fh:   # a cache, not a result: keep it out of git
+        fh.write("*\n")
+    log(f"captured motion: synthesizing {minutes:g} min of phrases with VocalTractLab into {root} ...")
+    corpora = generate_vtl_corpus(root, seed=seed, n_train_minutes=minutes, n_test_minutes=0.05,
+                                  audio_fraction=0.0, overwrite=True)
+    return corpora["train"], corpora["test"][:1]
 
 
 def phone_axis(ax, utt, *, every: int = 1) -> None:

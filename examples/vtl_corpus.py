@@ -13,7 +13,7 @@ Run::
 
 The figure goes to ``OUT_DIR/vtl_corpus.png`` (default ``examples/out``).
 """
-import sys
+import argparse
 from pathlib import Path
 
 import matplotlib
@@ -71,4 +71,8 @@ def main(out_dir="examples/out", name=None):
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:3])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out_dir", nargs="?", default="examples/out", help="where the figure goes (default: examples/out)")
+    ap.add_argument("utterance", nargs="?", help="name of a training utterance (default: the first)")
+    args = ap.parse_args()
+    main(args.out_dir, args.utterance)

@@ -122,7 +122,7 @@ def test_nonlinear_rig_function_recovers_controls_and_respects_bounds():
     assert est.min() >= 0 and est.max() <= 1
 
 
-def _corpus(frames_per_utt, trajs, fr=100.0):
+def _corpus(trajs, fr=100.0):
     utts = []
     for k, T in enumerate(trajs):
         n = len(T)
@@ -139,7 +139,7 @@ def test_crossmapper_maps_a_corpus_to_controls_with_alignments_kept():
     C_k = rng.uniform(0, 1, size=(3, 4))                  # the artist's poses of the key shapes
     V_k = rig(C_k)
     alphas = [rng.dirichlet(np.ones(3), size=n) for n in (30, 45)]   # convex blends
-    captured = _corpus(None, [a @ L for a in alphas])
+    captured = _corpus([a @ L for a in alphas])
     cm = CrossMapper(key_shapes=L, target_key_shapes=V_k, rig=LinearRig(rig.neutral, rig.deltas,
                                                                         control_names=list("jklm")))
     out = cm.fit(captured).transform(captured)
@@ -159,6 +159,12 @@ def test_crossmapper_without_target_returns_blend_weights():
     assert w.shape == (90, len(cm.key_shapes_)) and (w >= 0).all()
     np.testing.assert_allclose(w @ cm.key_shapes_, frames, atol=0.2)
     assert cm.get_params()["preference"] == "min"
+    K = len(cm.key_shapes_)
+    named = cm.set_params(control_names=[f"s{k}" for k in range(K)]).transform(_corpus([frames]))
+    assert named.channels == tuple(f"s{k}" for k in range(K))
+    np.testing.assert_array_equal(named[0].trajectory, w)
+    with pytest.raises(DataError, match=f"expected {K} names"):
+        cm.set_params(control_names=["only"]).transform(frames)
 
 
 @pytest.mark.parametrize("bad, field", [
@@ -197,7 +203,7 @@ def test_cli_crossmap_writes_controls_and_names_bad_files(tmp_path, capsys):
     rig = _rig(seed=18, n_controls=4, n_dims=10)
     C_k = rng.uniform(0, 1, size=(3, 4))
     alphas = [rng.dirichlet(np.ones(3), size=n) for n in (20, 30)]
-    save_corpus(_corpus(None, [a @ L for a in alphas]), tmp_path / "captured")
+    save_corpus(_corpus([a @ L for a in alphas]), tmp_path / "captured")
     np.save(tmp_path / "keys.npy", L)
     np.savetxt(tmp_path / "posed.csv", rig(C_k), delimiter=",")
     np.save(tmp_path / "deltas.npy", rig.deltas)

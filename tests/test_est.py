@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from dam.data import DataError
-from dam.est import read_est, read_est_trajectory, write_est
+from dam.est import read_est, read_est_trajectory, stored_frame_rate, write_est
 from dam.io import load_corpus, write_lab
 from dam.data import Alignment
 
@@ -110,7 +110,9 @@ def test_ema_corpus_with_htk_labels_loads(tmp_path):
     # A speech scientist's EMA corpus: binary EST tracks at 200 Hz + HTK labels, no corpus.json.
     rng = np.random.default_rng(1)
     truth = {}
-    for stem, n in (("u1", 60), ("u2", 45)):
+    # Lengths as in mngu0: float32 times put 1 / median(diff) at 200.00004 for one file and 199.9978
+    # for the other; the reader must still give both the 200 Hz they were written at.
+    for stem, n in (("u1", 60), ("u2", 1500)):
         vals = rng.normal(size=(n, 3)).astype(np.float32)
         write_est(tmp_path / f"{stem}.ema", vals, frame_rate=200.0, channels=["tt_x", "tt_y", "li_y"])
         dur = n / 200.0
@@ -118,8 +120,18 @@ def test_ema_corpus_with_htk_labels_loads(tmp_path):
                   tmp_path / f"{stem}.lab")
         truth[stem] = vals
     corpus = load_corpus(tmp_path)
-    assert corpus.frame_rate == pytest.approx(200.0)
+    assert corpus.frame_rate == 200.0
     assert corpus.channels == ("tt_x", "tt_y", "li_y")
     for u in corpus:
         np.testing.assert_array_equal(u.trajectory, truth[u.name])
         assert u.alignment.labels == ("sil", "a", "sil")
+
+
+@pytest.mark.parametrize("rate", [200.0, 500.0, 100.0, 250.0])
+@pytest.mark.parametrize("n", [3, 700, 20000])
+def test_frame_rate_survives_float32_times(rate, n):
+    t32 = (np.arange(n) / rate).astype(np.float32)
+    assert stored_frame_rate(t32) == rate
+    # an odd rate comes back within the precision the times carry
+    odd = 44100 / 110
+    assert stored_frame_rate((np.arange(n) / odd).astype(np.float32)) == pytest.approx(odd, rel=2e-3 if n == 3 else 1e-5)

@@ -80,6 +80,12 @@ def test_retargeter_keeps_corpus_alignments_and_can_clip():
     assert out[0].trajectory.min() >= 0 and out[0].trajectory.max() <= 1
     raw = rt.set_params(bounds=None).transform(X)
     assert raw.min() < 0 or raw.max() > 1          # the clip did something
+    # a list of utterances is the same reference as the corpus holding them
+    half = Alignment(["sil", "a"], [0, 0.3], [0.3, 0.6])
+    halves = [Utterance(half, X[:60], 100.0, corpus.channels), Utterance(half, X[60:], 100.0, corpus.channels)]
+    np.testing.assert_allclose(RigSpaceRetargeter(n_modes=2).fit(halves).components_, rt.components_, atol=1e-12)
+    out = rt.transform(halves)
+    assert isinstance(out, list) and [u.n_frames for u in out] == [60, 60]
 
 
 def test_bad_input_is_an_error_naming_the_field():

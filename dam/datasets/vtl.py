@@ -59,7 +59,7 @@ from ..data import Alignment, Corpus, DataError, Utterance
 __all__ = [
     "VTL_CHANNELS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",
     "Word", "PhrasePlan", "load_lexicon", "extract_articubench_lexicon", "map_phones",
-    "check_vtl_symbols", "probe_vtl_symbol", "split_words", "plan_phrases", "plan_corpus",
+    "import_vtl", "check_vtl_symbols", "probe_vtl_symbol", "split_words", "plan_phrases", "plan_corpus",
     "segment_file_text",
     "read_tract_sequence", "resample_tract", "synthesize_phrase", "generate_vtl_corpus",
     "add_generate_vtl", "main",
@@ -116,6 +116,16 @@ LICENCE_NOTE = (
     "is redistributed under GPL-3.0-or-later (text in dam/datasets/data/LICENSES/GPL-3.0.txt). "
     "To be safe, treat the corpus as derived from GPL-3.0-or-later data."
 )
+
+
+def import_vtl():
+    """``vocaltractlab_cython``, or an ImportError that says how to install it."""
+    try:
+        import vocaltractlab_cython
+    except ImportError as exc:  # pragma: no cover - depends on the install
+        raise ImportError("this needs VocalTractLab: pip install 'dam[vtl]' (vocaltractlab-cython); "
+                          f"import failed: {exc}") from None
+    return vocaltractlab_cython
 
 
 # -- the lexicon ------------------------------------------------------------
@@ -225,14 +235,14 @@ def probe_vtl_symbol(symbol: str, workdir=None) -> bool:
     score of ``a <nonsense> a``, which VTL certainly drops: equal scores mean
     the symbol is dropped too.
     """
-    import vocaltractlab_cython as vtl
+    vtl = import_vtl()
 
     def score(sym):
+        plan = PhrasePlan("probe", (), ("", "a", sym, "a", ""), (0.1, 0.12, 0.1, 0.12, 0.1), (), 1.0, False)
         with tempfile.TemporaryDirectory(dir=workdir) as tmp:
             seg, ges = os.path.join(tmp, "p.seg"), os.path.join(tmp, "p.ges")
-            plan = [("", 0.1), ("a", 0.12), (sym, 0.1), ("a", 0.12), ("", 0.1)]
             with open(seg, "w", encoding="utf-8") as fh:
-                fh.writelines(f"name = {n}; duration_s = {d:.6f};\n" for n, d in plan)
+                fh.write(segment_file_text(plan))
             vtl.phoneme_file_to_gesture_file(seg, ges)
             with open(ges, encoding="utf-8") as fh:
                 return fh.read()
@@ -428,7 +438,7 @@ def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate
     (ndarray, shape (n_frames, 19), ``n_frames = alignment.n_frames(frame_rate)``),
     ``audio`` (int16 ndarray at ``audio_rate`` or None) and ``n_states``.
     """
-    import vocaltractlab_cython as vtl
+    vtl = import_vtl()
 
     check_vtl_symbols([lab for lab in plan.labels if lab], source=plan.name)
     # Durations are whole milliseconds: rounding the sums keeps boundaries exact in the TextGrid.
@@ -572,23 +582,23 @@ def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0
     -------
     dict with keys ``"train"`` and ``"test"``: the corpora as written.
     """
-    import vocaltractlab_cython as vtl
+    vtl = import_vtl()
 
     if not 0 < frame_rate <= VTL_STATE_RATE:
         raise DataError(None, "frame_rate", frame_rate, f"must be in (0, {VTL_STATE_RATE:.1f}] Hz")
     if trajectory_format not in ("npy", "csv"):
         raise DataError(None, "trajectory_format", trajectory_format, "use 'npy' or 'csv'")
     out = Path(out_dir)
-    for split in ("train", "test"):
-        d = out / split
-        if d.exists() and any(d.iterdir()):
-            if not overwrite:
-                raise DataError(str(d), "out_dir", str(d), "exists and is not empty",
-                                "pass overwrite=True (--overwrite) to replace it")
-            shutil.rmtree(d)
+    full = [out / split for split in ("train", "test") if (out / split).exists() and any((out / split).iterdir())]
+    if full and not overwrite:
+        raise DataError(str(full[0]), "out_dir", str(full[0]), "exists and is not empty",
+                        "pass overwrite=True (--overwrite) to replace it")
+    # Plan (and check every symbol) before anything is deleted: a bad lexicon must not cost the old corpus.
     plans, n_words = plan_corpus(seed=seed, n_train_minutes=n_train_minutes, n_test_minutes=n_test_minutes,
                                  test_word_fraction=test_word_fraction, audio_fraction=audio_fraction,
                                  lexicon=lexicon, mapping=mapping, **plan_options)
+    for d in full:
+        shutil.rmtree(d)
     version = vtl.get_version()
     corpora = {}
     for split, split_plans in plans.items():
@@ -686,11 +696,15 @@ def main(argv=None) -> int:
     lex.add_argument("pkl", help="path to articubench/data/lexical_embedding_vectors.pkl")
     lex.add_argument("--out", default=str(LEXICON_PATH))
     args = parser.parse_args(argv)
-    if args.command == "generate":
-        run_generate(args)
-    else:
-        n = extract_articubench_lexicon(args.pkl, args.out)
-        print(f"wrote {n} words to {args.out}")
+    try:
+        if args.command == "generate":
+            run_generate(args)
+        else:
+            n = extract_articubench_lexicon(args.pkl, args.out)
+            print(f"wrote {n} words to {args.out}")
+    except (DataError, ImportError, OSError) as exc:  # one line, as `dam` prints it; no traceback
+        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -142,15 +142,17 @@ def add_crossmap(sub) -> None:
              neutral="rig_neutral", vertices="target_key_shapes")
 def cmd_crossmap(args) -> int:
     from .crossmap import CrossMapper
+    from .data import DataError
     from .rig import load_matrix
-    captured = _load(args, args.captured)
+    if args.target_key_shapes is not None and args.rig_deltas is None:  # before the slow part
+        raise DataError(None, "--rig-deltas", None, "--target-key-shapes needs the target's rig (--rig-deltas)")
     pref = args.preference
     if pref is not None and pref != "min":
         try:
             pref = float(pref)
         except ValueError:
-            from .data import DataError
             raise DataError(None, "--preference", pref, "must be a number or 'min'") from None
+    captured = _load(args, args.captured)
     cm = CrossMapper(key_shapes=None if args.key_shapes is None else load_matrix(args.key_shapes, "key_shapes"),
                      target_key_shapes=None if args.target_key_shapes is None
                      else load_matrix(args.target_key_shapes, "target_key_shapes"),
@@ -163,9 +165,6 @@ def cmd_crossmap(args) -> int:
     if args.save_key_shapes:
         _save_matrix(cm.key_shapes_, args.save_key_shapes)
         _info(args, f"wrote key shapes {cm.key_shapes_.shape} to {args.save_key_shapes}")
-    if args.target_key_shapes is not None and args.rig_deltas is None:
-        from .data import DataError
-        raise DataError(None, "--rig-deltas", None, "--target-key-shapes needs the target's rig (--rig-deltas)")
     if args.output:
         _write(args, cm.transform(captured), "controls" if args.target_key_shapes else "blend weights")
     elif not args.save_key_shapes:

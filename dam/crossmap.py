@@ -42,7 +42,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .data import DataError
-from .rig import LinearRig, as_rig, check_bounds, check_frames, map_trajectories, stack_frames
+from .rig import LinearRig, as_rig, check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
 __all__ = ["find_key_shapes", "blend_weights", "blend_vertices", "fit_controls", "CrossMapper"]
 
@@ -313,9 +313,7 @@ class CrossMapper(BaseEstimator, TransformerMixin):
         return self
 
     def _check_fitted(self):
-        if not hasattr(self, "key_shapes_"):
-            from .base import NotFittedError
-            raise NotFittedError("this CrossMapper is not fitted yet; call fit(captured) first")
+        check_fitted(self, "key_shapes_", "fit(captured)")
 
     def weights(self, X, *, names=None):
         """Blend weights per frame, shape (n_frames, n_key_shapes), container kept.

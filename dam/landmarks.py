@@ -41,7 +41,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .data import DataError
-from .rig import LinearRig, as_rig, check_bounds, check_frames, map_trajectories, stack_frames
+from .rig import LinearRig, as_rig, check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
 __all__ = ["similarity_transform", "landmark_targets", "tied_parameters", "solve_landmarks", "LandmarkSolver"]
 
@@ -357,9 +357,7 @@ class LandmarkSolver(BaseEstimator, TransformerMixin):
 
     def transform(self, X):
         """Rig parameters per frame: array, Utterance, Corpus (alignments kept) or list in, same out."""
-        if not hasattr(self, "scale_"):
-            from .base import NotFittedError
-            raise NotFittedError("this LandmarkSolver is not fitted yet; call fit(neutral_frames) or fit(None)")
+        check_fitted(self, "scale_", "fit(neutral_frames) or fit(None)")
         n = self._n()
         if self.param_names is not None:
             names = list(self.param_names)

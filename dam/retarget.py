@@ -41,7 +41,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .data import DataError
-from .rig import check_bounds, check_frames, map_trajectories, stack_frames
+from .rig import check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
 __all__ = ["principal_modes", "project", "retargeting_poses", "retarget_weights",
            "rig_space_retarget", "RigSpaceRetargeter"]
@@ -214,9 +214,7 @@ class RigSpaceRetargeter(BaseEstimator, TransformerMixin):
         return self
 
     def _check_fitted(self):
-        if not hasattr(self, "components_"):
-            from .base import NotFittedError
-            raise NotFittedError("this RigSpaceRetargeter is not fitted yet; call fit(reference) first")
+        check_fitted(self, "components_", "fit(reference)")
 
     def reference_poses(self) -> np.ndarray:
         """The 2K reference shapes for the artist, shape (2 n_modes, n_dims)."""

@@ -24,7 +24,7 @@ import numpy as np
 from .data import Corpus, DataError, Utterance
 
 __all__ = ["LinearRig", "as_rig", "check_frames", "check_bounds", "map_trajectories", "stack_frames",
-           "load_matrix", "name_source"]
+           "check_fitted", "load_matrix", "name_source"]
 
 
 def check_frames(X, field: str, *, n_dims: int | None = None, source: str | None = None,
@@ -198,6 +198,13 @@ def as_rig(rig, n_controls: int | None = None, *, count_name: str = "n_controls"
     deltas = check_frames(rig, "rig")
     lin = LinearRig(np.zeros(deltas.shape[1]), deltas)
     return lin, lin, lin.n_controls
+
+
+def check_fitted(estimator, attribute: str, how: str) -> None:
+    """Raise :class:`~dam.NotFittedError` unless ``estimator`` has ``attribute`` (``how``: the call that sets it)."""
+    if not hasattr(estimator, attribute):
+        from .base import NotFittedError
+        raise NotFittedError(f"this {type(estimator).__name__} is not fitted yet; call {how} first")
 
 
 def name_source(exc: DataError, source) -> DataError:

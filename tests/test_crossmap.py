@@ -226,3 +226,12 @@ def test_cli_crossmap_writes_controls_and_names_bad_files(tmp_path, capsys):
     assert main(["crossmap", str(tmp_path / "captured"), "--key-shapes", str(tmp_path / "bad.npy")]) == 1
     err = capsys.readouterr().err
     assert "bad.npy" in err and "key_shapes" in err and "(3, 7)" in err
+
+
+def test_transform_before_fit_is_a_not_fitted_error():
+    from dam import NotFittedError
+    from dam.landmarks import LandmarkSolver
+    from dam.retarget import RigSpaceRetargeter
+    for est in (CrossMapper(), RigSpaceRetargeter(), LandmarkSolver(rig=np.eye(2))):
+        with pytest.raises(NotFittedError, match=f"{type(est).__name__} is not fitted"):
+            est.transform(np.ones((3, 2)))

@@ -328,7 +328,7 @@ def _as_corpus(spec) -> Corpus:
 
 def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, out=None, *,
             test_size: float = 0.25, random_state: int = 0, n_boot: int = 2000, unknown_phone: str | None = "fallback",
-            verbose: int = 1) -> ComparisonResult:
+            channels=None, verbose: int = 1) -> ComparisonResult:
     """Fit and score several synthesizers on the same held-out data.
 
     Parameters
@@ -359,6 +359,8 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
         explicitly: a test phone never seen in training is replaced by the
         documented fallback (:func:`dam.phonetics.fallback_phone`) instead of
         failing the model. None keeps the models' own defaults.
+    channels : list of str, optional
+        Compare on these channels only (see :meth:`dam.Corpus.select_channels`).
     verbose : int, default 1
         Progress bar on standard error (only when it is a terminal).
 
@@ -370,6 +372,8 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
     from .metrics import evaluate
     specs = _model_specs(models)
     train = _as_corpus(train)
+    if channels is not None:
+        train = train.select_channels(channels)
     if test is not None and cv is not None:
         raise ValueError("give either test or cv, not both")
     if cv is not None:
@@ -377,6 +381,8 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
         where = f"{train.name or train.source or 'corpus'} ({int(cv)}-fold cross-validation)"
     elif test is not None:
         test = _as_corpus(test)
+        if channels is not None:
+            test = test.select_channels(channels)
         folds = [(train, test)]
         where = f"{test.name or test.source or 'test corpus'}"
     else:
@@ -457,32 +463,36 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
 
 
 # -- demo ---------------------------------------------------------------------
+DEMO_CHANNELS = {"vtl": ("JA", "LP", "LD", "TCX", "TCY", "TTY")}  # jaw, lips, tongue body and tip
+
+
 def run_demo(out_dir=None, *, corpus: str | None = None, models=DEMO_MODELS, n_jobs: int = 1,
-             verbose: int = 1) -> ComparisonResult:
+             channels="demo", verbose: int = 1) -> ComparisonResult:
     """The ``dam demo`` comparison on a bundled corpus; prints the table.
 
-    Uses the ``vtl`` corpus (its train and test parts) when it is bundled,
-    else ``tiny`` (hold-out quarter). Models whose dependencies are missing
-    are listed as skipped.
+    ``vtl`` by default: trained on its train part, scored on its held-out
+    test part (disjoint words), on six representative channels (jaw, lips,
+    tongue body and tip; ``channels=None`` for all 19). Models whose
+    dependencies are missing are listed as skipped.
     """
     from . import datasets
-    name = corpus or ("vtl" if _bundled("vtl") else "tiny")
+    name = corpus or "vtl"
     ds = datasets._get(name)
+    if channels == "demo":
+        channels = DEMO_CHANNELS.get(name)
+    if verbose:
+        print(datasets.describe(name), file=sys.stderr)
+        if channels:
+            print(f"channels: {', '.join(channels)} (of the corpus's own; --all-channels for every one)",
+                  file=sys.stderr)
+        print(file=sys.stderr)
     if "test" in ds.splits:
-        res = compare(models, f"{name}:train", f"{name}:test", n_jobs=n_jobs, out=out_dir, verbose=verbose)
+        res = compare(models, f"{name}:train", f"{name}:test", n_jobs=n_jobs, out=out_dir,
+                      channels=channels, verbose=verbose)
     else:
-        res = compare(models, name, n_jobs=n_jobs, out=out_dir, verbose=verbose)
+        res = compare(models, name, n_jobs=n_jobs, out=out_dir, channels=channels, verbose=verbose)
     print(res.table())
     return res
-
-
-def _bundled(name: str) -> bool:
-    from . import datasets
-    try:
-        p = datasets.path(name)
-    except KeyError:
-        return False
-    return p.exists() and any(p.iterdir())
 
 
 # -- command line -------------------------------------------------------------
@@ -506,6 +516,7 @@ def add_compare(sub) -> None:
     p.add_argument("-p", "--param", action="append", default=[], metavar="LABEL.KEY=VALUE",
                    help="hyperparameter of one model (repeatable), e.g. mmm.order=1")
     p.add_argument("--seed", type=int, default=0, help="seed of the split, folds and bootstrap (default 0)")
+    p.add_argument("--channels", metavar="C1,C2,...", help="compare on these channels only (default: all)")
     p.set_defaults(func=cmd_compare)
 
 
@@ -524,8 +535,9 @@ def cmd_compare(args) -> int:
         if not dot or label not in by_label:
             raise ValueError(f"--param {text!r}: expected LABEL.KEY=VALUE with LABEL one of {list(by_label)}")
         by_label[label][2][k] = value
+    channels = [c.strip() for c in args.channels.split(",") if c.strip()] if args.channels else None
     res = compare(specs, args.train, args.test, cv=args.cv, n_jobs=args.jobs, out=args.out,
-                  random_state=args.seed, verbose=0 if args.quiet else 1)
+                  random_state=args.seed, channels=channels, verbose=0 if args.quiet else 1)
     print(res.table())
     if args.out and not args.quiet:
         print(f"wrote {args.out}/summary.csv, per_channel.csv, per_utterance.csv, summary.md, "

@@ -417,6 +417,18 @@ class Corpus:
     def duration(self) -> float:
         return sum(u.duration for u in self.utterances)
 
+    def select_channels(self, channels: Sequence[str]) -> "Corpus":
+        """A corpus with only ``channels``, in that order (names must exist)."""
+        names = list(self.channels)
+        missing = [c for c in channels if c not in names]
+        if missing or not channels:
+            raise DataError(self.source, "channels", missing or list(channels),
+                            "not channels of this corpus" if missing else "no channels selected",
+                            f"its channels are {names}")
+        cols = [names.index(c) for c in channels]
+        return Corpus([u.replace(trajectory=u.trajectory[:, cols], channels=list(channels)) for u in self],
+                      name=self.name, metadata=self.metadata, source=self.source)
+
     # -- splitting ---------------------------------------------------------
     def subset(self, indices) -> "Corpus":
         return Corpus([self.utterances[i] for i in indices], name=self.name,

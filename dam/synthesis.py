@@ -1,8 +1,10 @@
 """Eq. (2) of Chen et al. (2012): concatenating dominated animemes.
 
-``C*(t) = sum_j D_j(t_j) A_j(t_j)`` (the paper's plain sum,
+``C*(t) = sum_j D_j(t_j) A_j(t_j)`` (Eq. 2 as printed, the plain sum,
 ``normalize=False``) or the Cohen-Massaro weighted average
-``sum_j D_j A_j / sum_j D_j`` (``normalize=True``), with ``t_j`` the local
+``sum_j D_j A_j / sum_j D_j`` (``normalize=True``, what the paper's text
+describes as "the summation of their normalized values", and the default of
+:class:`dam.model.DAM`: see its Notes), with ``t_j`` the local
 time of segment ``j``. Dominance is truncated (see :mod:`dam.dominance`), so
 each segment touches a bounded window of frames and the cost per phone is
 constant.

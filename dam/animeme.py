@@ -95,7 +95,7 @@ def legendre_to_monomial(coef) -> np.ndarray:
         Shifted-Legendre coefficients (leading axis is the degree).
     """
     coef = np.asarray(coef, dtype=float)
-    return np.tensordot(_monomial_matrix(coef.shape[0] - 1), coef, axes=1)
+    return (_monomial_matrix(coef.shape[0] - 1) @ coef.reshape(coef.shape[0], -1)).reshape(coef.shape)
 
 
 def monomial_to_legendre(coef) -> np.ndarray:

@@ -25,7 +25,10 @@ A path picks one mode per segment and costs::
 :func:`astar` finds the cheapest path with the admissible and consistent
 heuristic ``h(j) = sum_{k>j} min_g w_c E_c(k, g)`` (smoothness costs are
 non-negative); :func:`viterbi` (dynamic programming) and :func:`exhaustive`
-(enumeration) are the references the tests hold it to.
+(enumeration) are the references the tests hold it to. Synthesis runs
+:func:`astar_blocks`: the graph splits at single-mode phones into independent
+blocks, short blocks are costed in full for all blocks at once, long ones go
+to :func:`astar`.
 
 numpy only: this module is on the load + predict path of a saved model.
 """
@@ -37,9 +40,13 @@ import itertools
 import numpy as np
 
 __all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "pad_layers", "astar",
-           "astar_blocks", "viterbi", "exhaustive", "path_cost"]
+           "astar_blocks", "free_path", "viterbi", "exhaustive", "path_cost"]
 
 BOUNDARY = "#"
+
+# Blocks of free layers with at most this many paths are costed in full at
+# once (vectorized); longer ones are searched by A*.
+ENUMERATE_MAX_PATHS = 1024
 
 
 def context_counts(labels_per_utt, modes_per_utt, n_modes: dict) -> dict:
@@ -227,6 +234,11 @@ def astar_blocks(nodes: np.ndarray, edges: np.ndarray):
 
     A layer with one node lies on every path, so the cheapest path splits
     there into independent searches (exact, and most phones have one mode).
+    Short blocks of free layers (at most :data:`ENUMERATE_MAX_PATHS` paths:
+    typically one or two multi-mode phones between single-mode ones) are
+    solved for all blocks at once by costing every path of each (what A*
+    would settle on, without a Python loop per node); longer blocks are
+    searched by :func:`astar`.
 
     Parameters
     ----------
@@ -240,24 +252,64 @@ def astar_blocks(nodes: np.ndarray, edges: np.ndarray):
     cost : float
     """
     J = nodes.shape[0]
-    forced = np.isfinite(nodes).sum(axis=1) == 1
-    path = np.argmin(nodes, axis=1)         # the only node of a forced layer
-    j = 0
-    while j < J:
-        if forced[j]:
-            j += 1
-            continue
-        end = j
-        while end < J and not forced[end]:
-            end += 1
-        lo, hi = max(j - 1, 0), min(end + 1, J)   # the forced neighbours anchor the block
-        sub, _ = astar(nodes[lo:hi], edges[lo:hi - 1])
-        path[lo:hi] = sub
-        j = end
-    path = path.tolist()
-    cost = float(nodes[0, path[0]]) + sum(float(edges[i - 1, path[i - 1], path[i]] + nodes[i, path[i]])
-                                          for i in range(1, J))
-    return path, cost
+    if J == 0:
+        return [], 0.0
+    path = free_path(nodes, edges)
+    steps = np.arange(J - 1)
+    cost = float(nodes[np.arange(J), path].sum() + edges[steps, path[:-1], path[1:]].sum())
+    return path.tolist(), cost
+
+
+def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
+    """The cheapest path of :func:`astar_blocks` as an array, without its cost.
+
+    ``free`` (bool, shape (n_layers,)), if given, marks the layers with more
+    than one node; edges between two other layers are never read (the
+    caller may leave them unset).
+    """
+    J = nodes.shape[0]
+    path = np.argmin(nodes, axis=1)          # the only node of a forced layer
+    if free is None:
+        free = np.isfinite(nodes).sum(axis=1) > 1
+    idx = np.flatnonzero(free)
+    if idx.size == 0:
+        return path
+    cut = np.flatnonzero(np.diff(idx) != 1)
+    first = idx[np.concatenate(([0], cut + 1))]
+    last = idx[np.concatenate((cut, [idx.size - 1]))]
+    L = last - first + 1
+    G = nodes.shape[1]
+    small = np.power(float(G), L) <= ENUMERATE_MAX_PATHS
+    for n in np.unique(L[small]).tolist():
+        a = first[small & (L == n)]
+        path[a[:, None] + np.arange(n)] = _enumerate_blocks(nodes, edges, path, a, n)
+    for a, b in zip(first[~small], last[~small]):
+        lo, hi = max(a - 1, 0), min(b + 2, J)   # the forced neighbours anchor the block
+        path[lo:hi], _ = astar(nodes[lo:hi], edges[lo:hi - 1])
+    return path
+
+
+def _enumerate_blocks(nodes, edges, path, a, n):
+    """Cheapest modes of blocks of ``n`` free layers starting at ``a`` (shape (n_blocks,)),
+    each between forced layers (or the graph's ends), by costing all G^n paths at once.
+
+    Returns
+    -------
+    ndarray of int, shape (n_blocks, n)
+    """
+    J, G = nodes.shape
+    nb = len(a)
+    c = nodes[a].copy()                                       # (nb, G)
+    before = a > 0
+    c[before] += edges[a[before] - 1, path[a[before] - 1], :]
+    for k in range(1, n):                                     # c: (nb, G, ..., G), k axes of modes
+        shape = (nb,) + (1,) * (k - 1) + (G, G)
+        c = c[..., None] + edges[a + k - 1].reshape(shape) + nodes[a + k].reshape((nb,) + (1,) * k + (G,))
+    after = a + n < J
+    out = edges[a[after] + n - 1, :, path[a[after] + n]]     # (n_after, G)
+    c[after] += out.reshape((-1,) + (1,) * (n - 1) + (G,))
+    best = np.argmin(c.reshape(nb, -1), axis=1)
+    return np.stack(np.unravel_index(best, (G,) * n), axis=1)
 
 
 def viterbi(node_costs, edge_costs):

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["dominance", "dominance_dsigma", "reach", "outside_distance"]
+__all__ = ["dominance", "dominance_of_distance", "dominance_dsigma", "reach", "outside_distance"]
 
 
 def outside_distance(t):
@@ -63,10 +63,19 @@ def dominance(t, sigma, eps: float = 1e-8, tol: float = 0.0):
     ndarray, broadcast shape of ``t`` and ``sigma``
     """
     u = outside_distance(t)
-    s2 = np.asarray(sigma, dtype=float) ** 2 + eps
-    d = np.exp(-(u * u) / s2)
+    return dominance_of_distance(u * u, np.asarray(sigma, dtype=float) ** 2 + eps, tol)
+
+
+def dominance_of_distance(u2, s2, tol: float = 0.0) -> np.ndarray:
+    """Eq. (1) from the squared distance ``u2`` outside [0, 1] and ``s2 = sigma^2 + eps``.
+
+    The core of :func:`dominance`, for callers that hold ``u^2`` per frame and
+    ``s2`` per segment already (synthesis evaluates it for every frame/segment
+    pair). Broadcasts ``u2`` against ``s2``.
+    """
+    d = np.asarray(np.exp(-u2 / s2))
     if tol > 0.0:
-        d = np.where(d < tol, 0.0, d)
+        d[d < tol] = 0.0
     return d
 
 

@@ -22,13 +22,15 @@ from __future__ import annotations
 import numpy as np
 
 from . import animeme as _animeme
-from .astar import BOUNDARY, astar_blocks, mode_nll, smoothness_costs
+from .astar import BOUNDARY, free_path, mode_nll, smoothness_costs
 from .base import Synthesizer
 from .data import Alignment, Corpus
 from .dominance import dominance
 from .synthesis import concatenate
 
 __all__ = ["DAM", "DAMM0", "inspect_report"]
+
+_LEVELS = ("trigram", "bigram", "unigram")     # back-off levels of E_c (dam.astar.mode_nll)
 
 
 class DAM(Synthesizer):
@@ -227,8 +229,8 @@ class DAM(Synthesizer):
         from .estep import Occurrences
         from .modes import cluster_modes, resample_occurrences
 
-        self.__dict__.pop("_edge_cache", None)
-        self.__dict__.pop("_nll_cache", None)
+        for cache in ("_edge_cache", "_nll_cache", "_phone_cache"):
+            self.__dict__.pop(cache, None)
 
         Y = np.concatenate(corpus.trajectories)
         scale = Y.std(axis=0)
@@ -347,45 +349,109 @@ class DAM(Synthesizer):
         return model
 
     # -- synthesis -----------------------------------------------------------
+    def _cached(self, name: str, key, build):
+        """``build()``, kept in ``__dict__[name]`` while ``key`` is unchanged (a name without
+        a trailing underscore, so it is never saved)."""
+        cache = self.__dict__.get(name)
+        if cache is None or cache[0] != key:
+            cache = (key, build())
+            self.__dict__[name] = cache
+        return cache[1]
+
     def _edges(self) -> np.ndarray:
         """Value/derivatives of every animeme at t = 0 and 1, shape (n_modes, 2, 3, C) (cached)."""
-        key = id(self.coef_)
-        cache = self.__dict__.get("_edge_cache")
-        if cache is None or cache[0] != key:
-            cache = (key, _animeme.boundary_derivatives(self.coef_, order=2))
-            self.__dict__["_edge_cache"] = cache
-        return cache[1]
+        return self._cached("_edge_cache", id(self.coef_),
+                            lambda: _animeme.boundary_derivatives(self.coef_, order=2))
+
+    def _phone_table(self):
+        """(phone -> index, phones, first global mode per phone, mode count per phone) (cached)."""
+        def build():
+            names = list(self.phone_modes_)
+            fc = np.array([self.phone_modes_[p] for p in names], dtype=np.int64).reshape(-1, 2)
+            return {p: i for i, p in enumerate(names)}, names, fc[:, 0].copy(), fc[:, 1].copy()
+        return self._cached("_phone_cache", id(self.phone_modes_), build)
+
+    def _layers(self, alignment: Alignment):
+        """Labels after any fallback, and per segment: phone index, first global mode, mode count."""
+        labels = self._known_labels(alignment, self.unknown_phone)
+        index, _, first, count = self._phone_table()
+        pid = np.array([index[p] for p in labels], dtype=np.int64)
+        return labels, pid, first[pid], count[pid]
+
+    def _node_costs(self, pid: np.ndarray, count: np.ndarray):
+        """Node costs ``w_c E_c``, shape (n_seg, G_max) (+inf for missing modes), and the
+        back-off level of every ``E_c`` (index into ``_LEVELS``).
+
+        ``E_c`` is looked up once per distinct (phone, left, right) context of
+        the multi-mode segments and cached (single-mode segments cost 0).
+        """
+        J, G = len(pid), int(count.max())
+        raw = np.zeros((J, G))
+        level = np.full(J, _LEVELS.index("unigram"))
+        multi = np.flatnonzero(count > 1)
+        if multi.size:
+            _, names, _, n_modes = self._phone_table()
+            B = len(names)                           # the index of the utterance edge
+            ctx = np.concatenate([[B], pid, [B]])
+            code = (pid[multi] * (B + 1) + ctx[multi]) * (B + 1) + ctx[multi + 2]
+            uniq, inv = np.unique(code, return_inverse=True)
+            cache = self._cached("_nll_cache", (id(self.context_counts_), self.context_smoothing), dict)
+            hits = []
+            for k in uniq.tolist():
+                hit = cache.get(k)
+                if hit is None:
+                    p, lr = divmod(k, (B + 1) ** 2)
+                    left, right = ([*names, BOUNDARY][i] for i in divmod(lr, B + 1))
+                    nll, lev = mode_nll(self.context_counts_, names[p], left, right, int(n_modes[p]),
+                                        self.context_smoothing)
+                    row = np.zeros(int(n_modes.max()))
+                    row[:len(nll)] = nll
+                    hit = cache[k] = (row, _LEVELS.index(lev))
+                hits.append(hit)
+            raw[multi] = np.array([h[0] for h in hits])[inv, :G]
+            level[multi] = np.array([h[1] for h in hits])[inv]
+        nodes = self.w_c * raw
+        nodes[np.arange(G) >= count[:, None]] = np.inf
+        return nodes, level
+
+    def _edge_costs(self, first: np.ndarray, count: np.ndarray, durations, joints: np.ndarray) -> np.ndarray:
+        """Edge costs ``w_s E_s`` at ``joints`` (joint j: segment j to j + 1),
+        shape (len(joints), G_max, G_max), +inf to or from a missing mode."""
+        G = int(count.max())
+        # modes of each segment padded to G (a missing mode's index clipped to a real one;
+        # its cost is set to +inf below)
+        idx = first[:, None] + np.minimum(np.arange(G), count[:, None] - 1)
+        edges = self._edges()
+        durations = np.asarray(durations, dtype=float)
+        ecost = self.w_s * smoothness_costs(edges[idx[joints], 1], edges[idx[joints + 1], 0], durations[joints],
+                                            durations[joints + 1], self.time_scale_, self.channel_scale_)
+        missing = np.arange(G) >= count[:, None]
+        ecost[missing[joints]] = np.inf
+        ecost.transpose(0, 2, 1)[missing[joints + 1]] = np.inf
+        return ecost
 
     def _graph(self, labels, durations):
         """Node costs ``w_c E_c`` (n_seg, G_max), edge costs ``w_s E_s`` (n_seg - 1, G_max, G_max)
         (missing modes +inf, see :func:`dam.astar.pad_layers`) and the back-off level of every ``E_c``."""
-        J = len(labels)
-        padded = [BOUNDARY, *labels, BOUNDARY]
-        nll_cache = self.__dict__.setdefault("_nll_cache", {})
-        first = np.array([self.phone_modes_[p][0] for p in labels], dtype=int)
-        count = np.array([self.phone_modes_[p][1] for p in labels], dtype=int)
-        G = int(count.max())
-        nodes = np.full((J, G), np.inf)
-        levels = []
-        for j, p in enumerate(labels):
-            key = (p, padded[j], padded[j + 2], self.context_smoothing)
-            hit = nll_cache.get(key)
-            if hit is None:
-                hit = mode_nll(self.context_counts_, p, key[1], key[2], self.phone_modes_[p][1],
-                               self.context_smoothing)
-                nll_cache[key] = hit
-            nodes[j, :len(hit[0])] = self.w_c * hit[0]
-            levels.append(hit[1])
-        # every joint at once: modes of each segment padded to G (index of a missing mode
-        # clipped to a real one, its cost set to +inf below)
-        idx = first[:, None] + np.minimum(np.arange(G), count[:, None] - 1)
-        edges = self._edges()
-        ecost = self.w_s * smoothness_costs(edges[idx[:-1], 1], edges[idx[1:], 0], durations[:-1],
-                                            durations[1:], self.time_scale_, self.channel_scale_)
-        missing = np.arange(G) >= count[:, None]
-        ecost[missing[:-1]] = np.inf
-        ecost.transpose(0, 2, 1)[missing[1:]] = np.inf
-        return nodes, ecost, levels
+        index, _, first, count = self._phone_table()
+        pid = np.array([index[p] for p in labels], dtype=np.int64)
+        nodes, level = self._node_costs(pid, count[pid])
+        ecost = self._edge_costs(first[pid], count[pid], durations, np.arange(len(labels) - 1))
+        return nodes, ecost, [_LEVELS[v] for v in level]
+
+    def _choose(self, alignment: Alignment):
+        """A* (Section VI): global mode and first global mode of every segment, and the node costs."""
+        labels, pid, first, count = self._layers(alignment)
+        free = count > 1
+        if not free.any():                      # nothing to choose
+            return first, first, np.zeros((len(pid), 1))
+        nodes, _ = self._node_costs(pid, count)
+        # edges only where a path can differ: at the joints of multi-mode segments
+        joints = np.flatnonzero(free[:-1] | free[1:])
+        edges = np.zeros((len(pid) - 1, nodes.shape[1], nodes.shape[1]))
+        if joints.size:
+            edges[joints] = self._edge_costs(first, count, alignment.durations, joints)
+        return first + free_path(nodes, edges, free), first, nodes
 
     def select_modes(self, alignment: Alignment):
         """Mode of every segment by A* (Section VI).
@@ -395,16 +461,17 @@ class DAM(Synthesizer):
         modes : ndarray of int, shape (n_segments,)
             Global mode indices (rows of ``coef_``).
         cost : float
-            Total cost ``E`` of the chosen path.
+            Total cost ``E = sum w_c E_c + sum w_s E_s`` of the chosen path.
         """
         self._check_fitted()
-        labels = self._known_labels(alignment, self.unknown_phone)
-        first = np.array([self.phone_modes_[p][0] for p in labels], dtype=int)
-        if all(self.phone_modes_[p][1] == 1 for p in labels):
-            return first, 0.0
-        nodes, ecosts, _ = self._graph(labels, alignment.durations)
-        path, cost = astar_blocks(nodes, ecosts)
-        return first + np.asarray(path, dtype=int), cost
+        glob, first, nodes = self._choose(alignment)
+        cost = float(nodes[np.arange(len(glob)), glob - first].sum())
+        if len(glob) > 1:
+            edges, d = self._edges(), alignment.durations
+            es = smoothness_costs(edges[glob[:-1], 1][:, None], edges[glob[1:], 0][:, None], d[:-1], d[1:],
+                                  self.time_scale_, self.channel_scale_)
+            cost += float(self.w_s * es.sum())
+        return glob, cost
 
     def synthesize(self, alignment: Alignment, modes=None, n_frames: int | None = None) -> np.ndarray:
         """Eq. (2) for an alignment, with chosen (A*) or given modes.
@@ -424,17 +491,16 @@ class DAM(Synthesizer):
         self._check_fitted()
         n = alignment.n_frames(self.frame_rate_) if n_frames is None else n_frames
         if modes is None:
-            glob, _ = self.select_modes(alignment)
+            glob = self._choose(alignment)[0]
         else:
-            labels = self._known_labels(alignment, self.unknown_phone)
+            labels, _, first, counts = self._layers(alignment)
             modes = np.asarray(modes, dtype=int)
             if modes.shape != (len(labels),):
                 raise ValueError(f"modes has shape {modes.shape}, expected ({len(labels)},)")
-            counts = np.array([self.phone_modes_[p][1] for p in labels])
             if np.any((modes < 0) | (modes >= counts)):
                 j = int(np.flatnonzero((modes < 0) | (modes >= counts))[0])
                 raise ValueError(f"segment {j} ({labels[j]!r}): mode {modes[j]} out of range 0..{counts[j] - 1}")
-            glob = np.array([self.phone_modes_[p][0] for p in labels]) + modes
+            glob = first + modes
         return concatenate(alignment.starts, alignment.ends, self.coef_[glob], self.sigma_[glob],
                            self.frame_rate_, n, normalize=bool(self.normalize),
                            extrapolate=self.extrapolate, eps=float(self.eps), tol=float(self.dominance_tol))

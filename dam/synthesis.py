@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .animeme import basis
-from .dominance import dominance, reach
+from .animeme import EXTRAPOLATE, legendre_to_monomial
+from .dominance import dominance_of_distance, outside_distance, reach
 
 __all__ = ["segment_windows", "concatenate"]
 
@@ -55,16 +55,16 @@ def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int,
     ends = np.asarray(ends, dtype=float)
     dur = ends - starts
     r = reach(sigma_max, eps, tol)
-    n_frames = np.asarray(n_frames)
-    r = np.where(np.isfinite(r), r, n_frames / frame_rate / np.maximum(dur, 1e-12) + 1.0)
-    lo = np.clip(np.ceil((starts - r * dur) * frame_rate - 1e-9), 0, n_frames).astype(np.int64)
-    hi = np.clip(np.floor((ends + r * dur) * frame_rate + 1e-9) + 1, 0, n_frames).astype(np.int64)
-    hi = np.maximum(hi, lo)
+    if tol <= 0.0:                       # no truncation: the window is the whole utterance
+        r = np.asarray(n_frames) / frame_rate / np.maximum(dur, 1e-12) + 1.0
+    # (np.minimum/np.maximum rather than np.clip: cheaper per call, same values)
+    lo = np.minimum(np.maximum(np.ceil((starts - r * dur) * frame_rate - 1e-9), 0), n_frames).astype(np.int64)
+    hi = np.minimum(np.maximum(np.floor((ends + r * dur) * frame_rate + 1e-9) + 1, lo), n_frames).astype(np.int64)
     counts = hi - lo
     seg = np.repeat(np.arange(len(starts)), counts)
     # frame = lo[seg] + position within the segment's window
     first = np.cumsum(counts) - counts
-    frame = lo[seg] + (np.arange(seg.size) - first[seg])
+    frame = np.arange(seg.size) + (lo - first)[seg]
     t = (frame / frame_rate - starts[seg]) / dur[seg]
     return seg, frame, t
 
@@ -85,7 +85,8 @@ def concatenate(starts, ends, coef, sigma, frame_rate: float, n_frames: int, *,
     frame_rate : float
     n_frames : int
     normalize : bool, default False
-        False: plain sum (the paper). True: divide by the summed dominance.
+        False: plain sum (Eq. 2 as printed). True: divide by the summed
+        dominance (the weighted average; :class:`dam.model.DAM`'s default).
     extrapolate : {"polynomial", "hold"}
     eps, tol : float
         Dominance constant and truncation tolerance.
@@ -94,17 +95,34 @@ def concatenate(starts, ends, coef, sigma, frame_rate: float, n_frames: int, *,
     -------
     ndarray, shape (n_frames, n_channels)
     """
+    if extrapolate not in EXTRAPOLATE:
+        raise ValueError(f"parameter 'extrapolate' is {extrapolate!r}; use one of {EXTRAPOLATE}")
     coef = np.asarray(coef, dtype=float)
     sigma = np.asarray(sigma, dtype=float)
     n_ch = coef.shape[2]
     seg, frame, t = segment_windows(starts, ends, sigma.max(axis=1), frame_rate, n_frames, eps, tol)
-    D = dominance(t[:, None], sigma[seg], eps, tol)                    # (pairs, C)
-    B = basis(t, coef.shape[1] - 1, extrapolate)                       # (pairs, M+1)
-    A = np.einsum("pm,pmc->pc", B, coef[seg])                          # (pairs, C)
-    flat = (frame[:, None] * n_ch + np.arange(n_ch)).ravel()
-    num = np.bincount(flat, weights=(D * A).ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
+    # Per segment first (small arrays), then one gather per pair: the animeme
+    # by Horner's rule on the power-series coefficients (the same polynomial),
+    # the dominance from u^2 per pair and sigma^2 + eps per segment. Channels
+    # lead (C, pairs), so each channel's scatter-add reads contiguous memory;
+    # np.take into a reused buffer is much faster than fancy indexing.
+    power = legendre_to_monomial(coef.transpose(1, 2, 0))             # (M+1, C, n_seg)
+    ta = t if extrapolate == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0)
+    A = np.take(power[-1], seg, axis=1)                                # (C, pairs)
+    buf = np.empty_like(A)
+    for m in range(power.shape[0] - 2, -1, -1):
+        A *= ta
+        A += np.take(power[m], seg, axis=1, out=buf)
+    u = outside_distance(t)
+    D = dominance_of_distance(u * u, np.take((sigma * sigma + eps).T, seg, axis=1, out=buf), tol)  # (C, pairs)
+    A *= D
+    num = np.empty((n_frames, n_ch))
+    for c in range(n_ch):
+        num[:, c] = np.bincount(frame, weights=A[c], minlength=n_frames)
     if not normalize:
         return num
-    den = np.bincount(flat, weights=D.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
+    den = np.empty((n_frames, n_ch))
+    for c in range(n_ch):
+        den[:, c] = np.bincount(frame, weights=D[c], minlength=n_frames)
     # every frame lies inside some segment (D = 1 there), so den >= 1
     return num / np.maximum(den, 1e-300)

@@ -16,7 +16,11 @@ a bundled corpus. Reported, with medians and the machine:
 * references measured in the same run: a 200x2000 by 2000x200 numpy matmul,
   and the ``phone-mean`` baseline's fit and prediction.
 
-    python benchmarks/bench_dam.py [--minutes 1 2 5 10] [--repeat 3]
+    python benchmarks/bench_dam.py [--minutes 1 2 5 10] [--repeat 3] [--synthesis-only]
+
+``--synthesis-only`` fits one model (2 minutes) for the synthesis figures and
+keeps the training figures of the previous full run from ``dam.json`` (the
+.md says so, with that run's date).
 """
 from __future__ import annotations
 
@@ -59,7 +63,15 @@ def main(argv=None):
     ap.add_argument("--minutes", type=float, nargs="+", default=[1, 2, 5, 10])
     ap.add_argument("--repeat", type=int, default=3, help="runs per size (the longest gets one)")
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
+    ap.add_argument("--synthesis-only", action="store_true",
+                    help="measure synthesis only; keep the training figures of the previous run's dam.json")
     args = ap.parse_args(argv)
+    previous = None
+    if args.synthesis_only:
+        prev_path = Path(args.out) / "dam.json"
+        if not prev_path.exists():
+            ap.error(f"--synthesis-only keeps the training figures of {prev_path}, which does not exist")
+        previous = json.loads(prev_path.read_text())
 
     ref_a, ref_b = np.random.default_rng(0).random((2, 2000, 200))
     t_matmul = median_time(lambda: ref_a.T @ ref_b, repeat=7)
@@ -69,7 +81,15 @@ def main(argv=None):
     print(f"reference matmul (2000x200)^T (2000x200): {t_matmul * 1e3:.2f} ms", file=sys.stderr)
 
     fitted = None
-    for minutes in args.minutes:
+    if previous is not None:
+        for k in ("training", "training_peak_memory_mb", "training_peak_memory_minutes", "estep_normal_equations"):
+            if k in previous:
+                res[k] = previous[k]
+        res["training_from"] = previous.get("training_from", previous["machine"]["date"])
+        res["synthesis_previous"] = {**previous["synthesis"], "date": previous["machine"]["date"],
+                                     "load_average": previous["load_average"]}
+        fitted = DAM().fit(corpus_of(2))
+    for minutes in ([] if previous is not None else args.minutes):
         corpus = corpus_of(minutes)
         reps = 1 if minutes == max(args.minutes) else args.repeat
         times, models = [], []
@@ -109,6 +129,7 @@ def main(argv=None):
     pm = PhoneMean().fit(corpus_of(1))
     t_pm_batch = median_time(lambda: pm.predict(long), repeat=7)
     res["synthesis"] = {
+        "model": repr(fitted),
         "batch_phones": len(long), "batch_us_per_phone": t_batch / len(long) * 1e6,
         "one_phone_at_a_time_us_per_call": t_single * 1e6,
         "phone_mean_batch_us_per_phone": t_pm_batch / len(long) * 1e6,
@@ -157,6 +178,8 @@ def _markdown(r) -> str:
              f"Reference in the same run: a (2000x200)^T(2000x200) matmul took "
              f"{r['reference_matmul_seconds'] * 1e3:.2f} ms.", "",
              "## Training (paper: 50-60 min per control for ~10 min of speech; target < 10 s)", "",
+             *([f"Training figures kept from the full run of {r['training_from']} (this run measured "
+                "synthesis only: `--synthesis-only`).", ""] if "training_from" in r else []),
              "| minutes | frames | modes | s per channel (median) | EM iterations per channel | runs | phone-mean fit s | per channel / matmul |",
              "|---:|---:|---:|---:|---|---:|---:|---:|"]
     for t in r["training"]:
@@ -177,7 +200,13 @@ def _markdown(r) -> str:
               f"| DAM, one phone per call | {s['one_phone_at_a_time_us_per_call']:.0f} |",
               f"| phone-mean, same batch | {s['phone_mean_batch_us_per_phone']:.1f} |",
               "", f"DAM batch / phone-mean batch: {s['ratio_batch_to_phone_mean']:.1f}x "
-                  f"(model with {s['model_modes']} modes)."]
+                  f"(model `{s.get('model', 'DAM()')}` with {s['model_modes']} modes, fitted on 2 minutes)."]
+    if "synthesis_previous" in r:
+        p = r["synthesis_previous"]
+        lines += ["", f"Previous run ({p['date']}, load average {p['load_average'][0]:.1f}, model "
+                      f"`{p.get('model', 'DAM(normalize=False)')}`): {p['batch_us_per_phone']:.1f} us per phone in batch, "
+                      f"{p['one_phone_at_a_time_us_per_call']:.0f} us per one-phone call, "
+                      f"{p['ratio_batch_to_phone_mean']:.1f}x phone-mean."]
     return "\n".join(lines) + "\n"
 
 

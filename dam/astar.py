@@ -23,8 +23,9 @@ A path picks one mode per segment and costs::
   two modes connect.)
 
 :func:`astar` finds the cheapest path with the admissible and consistent
-heuristic ``h(j) = sum_{k>j} min_g w_c E_c(k, g)`` (smoothness costs are
-non-negative); :func:`viterbi` (dynamic programming) and :func:`exhaustive`
+heuristic ``h(j) = sum_{k>j} min_g (w_c E_c(k, g) + min_g' w_s E_s(g', g))``
+(every later layer costs at least its cheapest node plus the cheapest edge into
+it); :func:`viterbi` (dynamic programming) and :func:`exhaustive`
 (enumeration) are the references the tests hold it to. Synthesis runs
 :func:`astar_blocks`: the graph splits at single-mode phones into independent
 blocks, short blocks are costed in full for all blocks at once, long ones go
@@ -190,9 +191,11 @@ def astar(node_costs, edge_costs):
     J = nodes_a.shape[0]
     if J == 0:
         return [], 0.0
-    mins = nodes_a.min(axis=1)
-    # h[j]: cheapest possible remaining node costs after layer j (admissible, consistent)
-    h = np.concatenate([np.cumsum(mins[::-1])[::-1][1:], [0.0]]).tolist()
+    # h[j]: a lower bound on the cost after layer j: per later layer, its cheapest
+    # node plus the cheapest edge into that node (admissible and consistent: every
+    # step of a path costs at least its layer's bound)
+    step = (nodes_a[1:] + edges_a.min(axis=1)).min(axis=1) if J > 1 else np.zeros(0)
+    h = np.concatenate([np.cumsum(step[::-1])[::-1], [0.0]]).tolist()
     nodes, edges = nodes_a.tolist(), edges_a.tolist()   # plain floats: fast in the loop
     inf = float("inf")
     best = {}
@@ -271,16 +274,16 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     path = np.argmin(nodes, axis=1)          # the only node of a forced layer
     if free is None:
         free = np.isfinite(nodes).sum(axis=1) > 1
-    idx = np.flatnonzero(free)
+    idx = np.nonzero(free)[0]
     if idx.size == 0:
         return path
-    cut = np.flatnonzero(np.diff(idx) != 1)
+    cut = np.nonzero(np.diff(idx) != 1)[0]
     first = idx[np.concatenate(([0], cut + 1))]
     last = idx[np.concatenate((cut, [idx.size - 1]))]
     L = last - first + 1
     G = nodes.shape[1]
     small = np.power(float(G), L) <= ENUMERATE_MAX_PATHS
-    for n in np.unique(L[small]).tolist():
+    for n in set(L[small].tolist()):
         a = first[small & (L == n)]
         path[a[:, None] + np.arange(n)] = _enumerate_blocks(nodes, edges, path, a, n)
     for a, b in zip(first[~small], last[~small]):

@@ -37,11 +37,17 @@ FORMAT = "dam-model"
 FORMAT_VERSION = 1
 META_KEY = "__dam__"
 
-__all__ = ["Synthesizer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "load", "FORMAT_VERSION"]
+__all__ = ["Synthesizer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
+           "load", "FORMAT_VERSION"]
 
 
 class NotFittedError(RuntimeError, AttributeError):
     """Raised when ``predict`` (or similar) is called before ``fit``."""
+
+
+class ConvergenceWarning(UserWarning):
+    """An iterative fit stopped at its iteration limit before meeting its tolerance
+    (as scikit-learn's, without importing scikit-learn)."""
 
 
 class ModelFileError(ValueError):

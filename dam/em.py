@@ -18,6 +18,7 @@ only), so it never increases; :class:`ConvergenceMonitor` records it.
 from __future__ import annotations
 
 import sys
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,6 +65,14 @@ class ConvergenceMonitor:
     def done(self) -> bool:
         return self.converged or self.iter >= self.max_iter
 
+    @property
+    def last_improvement(self) -> float:
+        """Relative improvement of the last iteration (nan before the second report)."""
+        if len(self.history) < 2:
+            return float("nan")
+        prev, cur = self.history[-2], self.history[-1]
+        return (prev - cur) / max(abs(prev), 1e-300)
+
 
 def ridge_lambda(n_rows: int, ridge: float) -> float:
     """``lambda = ridge * n_rows``: per frame the objective is MSE + ridge ||a||^2.
@@ -82,7 +91,7 @@ def fitted_values_all(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, pr)
 
 def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float = 1e-6,
            tol: float = 1e-3, max_iter: int = 50, gn_steps: int = 1, verbose: int = 0,
-           fixed_sigma: bool = False, projected: bool = True):
+           fixed_sigma: bool = False, projected: bool = True, channels=None):
     """Fit every channel's animeme coefficients and sigmas.
 
     Parameters
@@ -106,6 +115,10 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
     projected : bool, default True
         M-step by variable projection (True) or with the coefficients frozen
         as in the paper (False); see :func:`dam.mstep.gauss_newton_sigma`.
+    channels : sequence of str, optional
+        Channel names for the :class:`dam.base.ConvergenceWarning` (issued
+        when a channel stops at ``max_iter`` with its last relative
+        improvement still >= ``tol``); default "channel 0", "channel 1", ...
 
     Returns
     -------
@@ -145,6 +158,7 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
     coef = A0.copy()
     sigma = np.repeat(S0[None, :], occ.n_modes, axis=0)
     curves, n_iter, converged = [], np.zeros(n_ch, dtype=int), np.zeros(n_ch, dtype=bool)
+    unconverged = []     # (channel, last relative improvement) stopped by max_iter
 
     from tqdm.auto import tqdm
     bar = tqdm(range(n_ch), desc="DAM EM (channels)", file=sys.stderr, leave=False,
@@ -171,7 +185,29 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         curves.append(np.array(mon.history))
         n_iter[c] = mon.iter
         converged[c] = mon.converged
+        if not fixed_sigma and not mon.converged and len(mon.history) >= 2:
+            unconverged.append((c, mon.last_improvement))
         if verbose > 1:
             print(f"channel {c}: {mon.iter} iterations, objective {mon.history[0]:.4g} -> "
                   f"{mon.history[-1]:.4g}", file=sys.stderr)
+    if unconverged:
+        warn_not_converged(unconverged, channels, tol, max_iter)
     return coef, sigma, curves, n_iter, converged
+
+
+def warn_not_converged(unconverged, channels, tol: float, max_iter: int) -> None:
+    """One :class:`dam.base.ConvergenceWarning` naming every channel EM left unconverged.
+
+    Parameters
+    ----------
+    unconverged : list of (int, float)
+        Channel index and its last relative improvement.
+    channels : sequence of str or None
+    """
+    from .base import ConvergenceWarning
+
+    names = [str(channels[c]) if channels is not None else f"channel {c}" for c, _ in unconverged]
+    which = ", ".join(f"{n} (last relative improvement {imp:.3g})" for n, (_, imp) in zip(names, unconverged))
+    warnings.warn(f"DAM EM stopped at max_iter={max_iter} before the relative improvement fell below "
+                  f"tol={tol:g} on {len(names)} channel(s): {which}. Raise max_iter, or raise tol to "
+                  "accept this precision.", ConvergenceWarning, stacklevel=3)

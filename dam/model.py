@@ -82,7 +82,9 @@ class DAM(Synthesizer):
         EM stops when the objective improves by less than this fraction in
         an iteration.
     max_iter : int, default 30
-        EM iterations at most (per channel).
+        EM iterations at most (per channel). A channel that stops here with
+        its last relative improvement still >= ``tol`` gets a
+        :class:`dam.base.ConvergenceWarning` (and ``converged_`` False).
     gn_steps : int, default 1
         Gauss-Newton steps per M-step (by variable projection, so each
         step also re-solves the animemes: see :func:`dam.mstep.gauss_newton_sigma`).
@@ -150,6 +152,11 @@ class DAM(Synthesizer):
     * With ``extrapolate="polynomial"`` the objective has local minima (the
       polynomial tails can stand in for the dominance); with ``"hold"``
       parameters generated with known values are recovered from any start.
+    * With the weighted average, no other variant wins on both bundled
+      corpora (held-out RMSE, tiny / vtl): the defaults 0.059 / 0.236;
+      ``extrapolate="hold"`` 0.056 / 0.280; ``modes="single"`` 0.064 /
+      0.2365; ``mode_preference="median"`` 0.057 / 0.242. So the other
+      defaults stay as they are.
     """
 
     name = "dam"
@@ -277,7 +284,8 @@ class DAM(Synthesizer):
                                       eps=float(self.eps), tol=float(self.dominance_tol))
         coef, sigma, curves, n_iter, converged = fit_em(
             occ, Y, sigma_init=self.sigma_init, ridge=self.ridge, tol=self.tol,
-            max_iter=int(self.max_iter), gn_steps=int(self.gn_steps), verbose=self.verbose)
+            max_iter=int(self.max_iter), gn_steps=int(self.gn_steps), verbose=self.verbose,
+            channels=list(corpus.channels))
         self.coef_, self.sigma_ = coef, sigma
         self.loss_curve_, self.n_iter_, self.converged_ = curves, n_iter, converged
 
@@ -394,7 +402,10 @@ class DAM(Synthesizer):
             B = len(names)                           # the index of the utterance edge
             ctx = np.concatenate([[B], pid, [B]])
             code = (pid[multi] * (B + 1) + ctx[multi]) * (B + 1) + ctx[multi + 2]
-            uniq, inv = np.unique(code, return_inverse=True)
+            if code.size > 32:       # look each distinct context up once
+                uniq, inv = np.unique(code, return_inverse=True)
+            else:                    # (np.unique costs more than it saves on a few phones)
+                uniq, inv = code, slice(None)
             cache = self._cached("_nll_cache", (id(self.context_counts_), self.context_smoothing), dict)
             hits = []
             for k in uniq.tolist():
@@ -446,6 +457,8 @@ class DAM(Synthesizer):
         if not free.any():                      # nothing to choose
             return first, first, np.zeros((len(pid), 1))
         nodes, _ = self._node_costs(pid, count)
+        if len(pid) == 1:                       # one phone (e.g. streaming): its cheapest E_c
+            return first + np.argmin(nodes[0]), first, nodes
         # edges only where a path can differ: at the joints of multi-mode segments
         joints = np.flatnonzero(free[:-1] | free[1:])
         edges = np.zeros((len(pid) - 1, nodes.shape[1], nodes.shape[1]))

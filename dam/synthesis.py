@@ -103,26 +103,21 @@ def concatenate(starts, ends, coef, sigma, frame_rate: float, n_frames: int, *,
     seg, frame, t = segment_windows(starts, ends, sigma.max(axis=1), frame_rate, n_frames, eps, tol)
     # Per segment first (small arrays), then one gather per pair: the animeme
     # by Horner's rule on the power-series coefficients (the same polynomial),
-    # the dominance from u^2 per pair and sigma^2 + eps per segment. Channels
-    # lead (C, pairs), so each channel's scatter-add reads contiguous memory;
-    # np.take into a reused buffer is much faster than fancy indexing.
-    power = legendre_to_monomial(coef.transpose(1, 2, 0))             # (M+1, C, n_seg)
-    ta = t if extrapolate == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0)
-    A = np.take(power[-1], seg, axis=1)                                # (C, pairs)
-    buf = np.empty_like(A)
+    # the dominance from u^2 per pair and sigma^2 + eps per segment
+    # (x.take(seg, axis=0): much faster than x[seg] on a 2-D x).
+    power = legendre_to_monomial(coef.transpose(1, 0, 2))             # (M+1, n_seg, C)
+    ta = (t if extrapolate == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0))[:, None]
+    A = power[-1].take(seg, axis=0)                                    # (pairs, C)
     for m in range(power.shape[0] - 2, -1, -1):
         A *= ta
-        A += np.take(power[m], seg, axis=1, out=buf)
+        A += power[m].take(seg, axis=0)
     u = outside_distance(t)
-    D = dominance_of_distance(u * u, np.take((sigma * sigma + eps).T, seg, axis=1, out=buf), tol)  # (C, pairs)
+    D = dominance_of_distance((u * u)[:, None], (sigma * sigma + eps).take(seg, axis=0), tol)  # (pairs, C)
     A *= D
-    num = np.empty((n_frames, n_ch))
-    for c in range(n_ch):
-        num[:, c] = np.bincount(frame, weights=A[c], minlength=n_frames)
+    flat = ((frame * n_ch)[:, None] + np.arange(n_ch)).ravel()
+    num = np.bincount(flat, weights=A.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
     if not normalize:
         return num
-    den = np.empty((n_frames, n_ch))
-    for c in range(n_ch):
-        den[:, c] = np.bincount(frame, weights=D[c], minlength=n_frames)
+    den = np.bincount(flat, weights=D.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
     # every frame lies inside some segment (D = 1 there), so den >= 1
     return num / np.maximum(den, 1e-300)

@@ -3,8 +3,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from dam.astar import (BOUNDARY, astar, astar_blocks, context_counts, exhaustive, mode_nll, pad_layers,
-                       path_cost, smoothness_costs, viterbi)
+import dam.astar
+from dam.astar import (BOUNDARY, astar, astar_blocks, context_counts, exhaustive, free_path, mode_nll,
+                       pad_layers, path_cost, smoothness_costs, viterbi)
 
 
 def _graph(seed, n_layers, max_modes, scale_edges=1.0):
@@ -39,6 +40,26 @@ def test_astar_equals_dynamic_programming_on_long_random_graphs(seed, n_layers, 
     p3, c3 = astar_blocks(*pad_layers(nodes, edges))
     assert c3 == pytest.approx(c2, rel=1e-12)
     assert p3 == p2
+
+
+@pytest.mark.parametrize("max_paths", [1, 64, 4096])
+def test_block_search_equals_dynamic_programming_whichever_solves_the_blocks(monkeypatch, max_paths):
+    # 1: every block goes to A*; 64 and 4096: short blocks costed in full, long ones to A*
+    monkeypatch.setattr(dam.astar, "ENUMERATE_MAX_PATHS", max_paths)
+    rng = np.random.default_rng(max_paths)
+    for seed in range(25):
+        n_layers = int(rng.integers(1, 40))
+        nodes, edges = _graph(seed, n_layers, 4)
+        n_pad, e_pad = pad_layers(nodes, edges)
+        p1, c1 = astar_blocks(n_pad, e_pad)
+        p2, c2 = viterbi(nodes, edges)
+        assert p1 == p2 and c1 == pytest.approx(c2, rel=1e-12)
+        # edges between two single-node layers are never read
+        free = np.array([len(n) > 1 for n in nodes])
+        both_forced = ~free[:-1] & ~free[1:]
+        e_nan = e_pad.copy()
+        e_nan[both_forced] = np.nan
+        assert free_path(n_pad, e_nan, free).tolist() == p2
 
 
 def test_astar_prefers_smoothness_when_data_terms_tie():

@@ -19,6 +19,7 @@ PHONES = ["a", "b", "c", "d", "e"]
 
 
 def _truth(extrapolate="polynomial", seed=0, sigma_range=(0.2, 0.6), degree=4, normalize=False):
+    """A known DAM; the plain sum (Eq. 2 as printed) unless ``normalize``."""
     par = dam_parameters(PHONES, 2, degree=degree, random_state=seed, sigma_range=sigma_range)
     return DAM.from_parameters(par, frame_rate=100.0, channels=["x", "y"], basis="legendre",
                                extrapolate=extrapolate, normalize=normalize)
@@ -29,7 +30,8 @@ def test_recovers_known_parameters_noise_free(extrapolate, seed):
     # sigma up to 0.6 durations: neighbouring dominances overlap over most of each phone
     true = _truth(extrapolate, seed)
     corpus = make_corpus(true, n_utterances=25, random_state=seed)
-    m = DAM(modes="single", extrapolate=extrapolate, degree=4, tol=1e-10, max_iter=40, ridge=1e-10).fit(corpus)
+    m = DAM(modes="single", extrapolate=extrapolate, degree=4, tol=1e-10, max_iter=40, ridge=1e-10,
+            normalize=False).fit(corpus)
     np.testing.assert_allclose(m.sigma_, true.sigma_, atol=1e-5)
     np.testing.assert_allclose(m.coef_, true.coef_, atol=1e-4)
     pred = m.predict(corpus.alignments[:3])
@@ -41,7 +43,7 @@ def test_recovers_known_parameters_with_noise():
     true = _truth("hold", 1, degree=2)
     noise = 0.05
     corpus = make_corpus(true, n_utterances=40, noise=noise, random_state=1)
-    m = DAM(modes="single", extrapolate="hold", degree=2).fit(corpus)
+    m = DAM(modes="single", extrapolate="hold", degree=2, normalize=False).fit(corpus)
     np.testing.assert_allclose(m.sigma_, true.sigma_, atol=0.03)
     np.testing.assert_allclose(m.coef_, true.coef_, atol=0.06)
     # the fit explains everything but the noise
@@ -137,6 +139,48 @@ def test_explain_and_inspection():
         m.animeme_curve("a", 2, t)
 
 
+def test_select_modes_equals_dynamic_programming_on_the_model_graph():
+    # a model with 1-3 modes per phone and random context counts, so that multi-mode
+    # phones form blocks of every length; the fast path must find the optimum
+    rng = np.random.default_rng(0)
+    phones, counts = {}, {}
+    for i, p in enumerate("abcdefgh"):
+        G = [1, 2, 3][i % 3]
+        phones[p] = (rng.normal(size=(G, 3, 2)), rng.uniform(0.1, 0.5, (G, 2)))
+    names = [*phones, "#"]
+    for p, (coef, _) in phones.items():
+        G = coef.shape[0]
+        tri = {L: {R: rng.integers(0, 5, G).tolist() for R in names} for L in names}
+        counts[p] = {"unigram": rng.integers(1, 9, G).tolist(), "left": {}, "right": {}, "trigram": tri}
+    m = DAM.from_parameters(phones, frame_rate=100.0, channels=["x", "y"], context_counts=counts,
+                            w_c=1.0, w_s=0.3)
+    from dam.astar import viterbi
+    for seed in range(5):
+        a = random_alignment(np.random.default_rng(seed), list(phones), n_segments=60)
+        glob, cost = m.select_modes(a)
+        nodes, edges, _ = m._graph(a.labels, a.durations)
+        path, want = viterbi(list(nodes), list(edges))
+        first = np.array([m.phone_modes_[p][0] for p in a.labels])
+        assert (glob - first).tolist() == path
+        assert cost == pytest.approx(want, rel=1e-10)
+        assert m.explain(a)[-1]["total"] == pytest.approx(want, rel=1e-10)
+
+
+def test_em_that_stops_at_max_iter_warns_naming_the_channels():
+    from dam.base import ConvergenceWarning
+    corpus = make_corpus(_truth("hold", 0, degree=1), n_utterances=6, noise=0.05, random_state=0)
+    with pytest.warns(ConvergenceWarning, match=r"max_iter=1 .*tol=1e-12.*x \(last relative improvement "
+                                                r".*y \(.*Raise max_iter, or raise tol"):
+        m = DAM(modes="single", degree=1, max_iter=1, tol=1e-12).fit(corpus)
+    assert not m.converged_.any() and np.all(m.n_iter_ == 1)
+    # converged: no warning
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        m = DAM(modes="single", degree=1, max_iter=30, tol=0.5).fit(corpus)
+    assert m.converged_.all()
+
+
 def test_unknown_phone_errors_or_falls_back():
     true = _truth("hold", 0, degree=1)
     corpus = make_corpus(true, n_utterances=8, random_state=0)
@@ -159,6 +203,8 @@ def test_bad_hyperparameters_are_refused_by_name():
 def test_registry_and_m0_variant():
     assert registry.get("dam") is DAM and registry.get("dam-m0") is DAMM0
     assert DAMM0().degree == 0 and DAMM0().get_params()["modes"] == DAM().modes
+    # the weighted average is the default of both (see the DAM's Notes)
+    assert DAM().normalize is True and DAMM0().normalize is True
     corpus = make_corpus(_truth("hold", 0, degree=1), n_utterances=6, random_state=0)
     m = DAMM0(max_iter=2).fit(corpus)
     assert m.coef_.shape[1] == 1

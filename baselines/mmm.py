@@ -37,8 +37,6 @@ import numpy as np
 from dam.base import Synthesizer
 from dam.data import Alignment, Corpus
 
-from .reference import PhoneMean
-
 __all__ = ["MMM", "difference_gram_banded", "banded_cholesky_solve", "solve_banded_spd", "mmm_system",
            "synthesis_loss_and_gradient"]
 
@@ -314,8 +312,7 @@ class MMM(Synthesizer):
         Y = np.concatenate(corpus.trajectories)
         loc, scale = Y.mean(axis=0), Y.std(axis=0) + 1e-12
         data = self._prepare(corpus, index, loc, scale)
-        mu0 = (PhoneMean().fit(corpus).table_ - loc) / scale
-        lv0 = np.log(np.maximum(_phone_variances(data, mu0), self.var_floor))
+        P = len(index)
         cands = [float(v) for v in np.atleast_1d(np.asarray(self.smoothness, dtype=float))]
         self.validation_rmse_ = {}
         if len(cands) > 1 and len(corpus) >= 2:
@@ -323,15 +320,19 @@ class MMM(Synthesizer):
             order = rng.permutation(len(corpus))
             n_val = min(max(1, int(round(self.validation_fraction * len(corpus)))), len(corpus) - 1)
             val, trn = order[:n_val], order[n_val:]
+            # Start and train on the training part only: the held-out frames must not
+            # leak into the choice of lambda (phones it lacks start at mean 0, variance 1).
+            part = [data[i] for i in trn]
+            mu0, lv0 = _phone_start(part, P, self.var_floor)
             for lam in cands:
-                # Means/variances from the training part only; unseen phones keep their start values.
-                mu, lv, _ = self._train(_concatenated([data[i] for i in trn]), mu0, lv0, lam)
+                mu, lv, _ = self._train(_concatenated(part), mu0, lv0, lam)
                 held_out = _concatenated([data[i] for i in val])
                 err = np.concatenate([p - d[3] for p, d in zip(self._synthesize_std(held_out, mu, lv, lam), held_out)])
                 self.validation_rmse_[lam] = float(np.sqrt(np.mean(err ** 2)))
             lam = min(cands, key=lambda v: (self.validation_rmse_[v], v))
         else:
             lam = cands[0]
+        mu0, lv0 = _phone_start(data, P, self.var_floor)
         mu, lv, mse = self._train(_concatenated(data), mu0, lv0, lam)
         self.smoothness_ = lam
         self.mean_ = loc + scale * mu
@@ -362,12 +363,24 @@ def _concatenated(data: list) -> list:
     return [(np.concatenate(rows), np.concatenate(dw), np.concatenate(gab, axis=1), np.concatenate(y))]
 
 
-def _phone_variances(data: list, mu0: np.ndarray) -> np.ndarray:
-    """Variance of the (standardised) training frames of every phone around its mean."""
-    P, C = mu0.shape
-    sq = np.zeros((P, C))
-    counts = np.zeros(P)
+def _phone_start(data: list, n_phones: int, var_floor: float):
+    """Mean and log variance of the (standardised) frames of every phone in ``data``.
+
+    The starting point of the training. A phone that owns no frame here starts
+    at the standardised corpus mean 0 and variance 1.
+
+    Returns
+    -------
+    mu0, lv0 : ndarray, shape (n_phones, n_channels)
+    """
+    C = data[0][3].shape[1]
+    sums, sq, counts = np.zeros((n_phones, C)), np.zeros((n_phones, C)), np.zeros(n_phones)
+    for rows, _, _, y in data:
+        np.add.at(sums, rows, y)
+        np.add.at(counts, rows, 1.0)
+    seen = counts[:, None] > 0
+    mu0 = np.where(seen, sums / np.maximum(counts, 1)[:, None], 0.0)
     for rows, _, _, y in data:
         np.add.at(sq, rows, (y - mu0[rows]) ** 2)
-        np.add.at(counts, rows, 1.0)
-    return np.where(counts[:, None] > 0, sq / np.maximum(counts, 1)[:, None], 1.0)
+    var = np.where(seen, sq / np.maximum(counts, 1)[:, None], 1.0)
+    return mu0, np.log(np.maximum(var, var_floor))

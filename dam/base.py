@@ -127,8 +127,7 @@ class Synthesizer:
             raise TypeError(f"{type(self).__name__}.fit expects a dam.Corpus, got {type(corpus).__name__}"
                             "; build one with dam.Corpus([...]) or dam.load_corpus(path)")
         self._check_params()
-        for k in [k for k in vars(self) if k.endswith("_") and not k.startswith("_")]:
-            delattr(self, k)
+        self._forget_learned()
         self.frame_rate_ = corpus.frame_rate
         self.channels_ = list(corpus.channels)
         counts: dict[str, int] = {}
@@ -136,8 +135,17 @@ class Synthesizer:
             for lab in a.labels:
                 counts[lab] = counts.get(lab, 0) + 1
         self.phone_counts_ = dict(sorted(counts.items()))
-        self._fit(corpus)
+        try:
+            self._fit(corpus)
+        except BaseException:
+            self._forget_learned()  # a failed fit leaves an unfitted model, not a half-fitted one
+            raise
         return self
+
+    def _forget_learned(self) -> None:
+        """Delete every learned attribute (public names ending in ``_``)."""
+        for k in [k for k in vars(self) if k.endswith("_") and not k.startswith("_")]:
+            delattr(self, k)
 
     def _check_params(self) -> None:
         """Validate hyperparameters before fitting (override)."""

@@ -390,6 +390,10 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
         where = f"{train.name or train.source or 'corpus'} (hold-out {test_size:g})"
     if tuple(folds[0][1].channels) != tuple(folds[0][0].channels):
         raise ValueError(f"train and test channels differ: {list(folds[0][0].channels)} vs {list(folds[0][1].channels)}")
+    if folds[0][1].frame_rate != folds[0][0].frame_rate:
+        # models predict at the training frame rate: scores against another rate would be meaningless
+        raise ValueError(f"train and test frame rates differ: {folds[0][0].frame_rate:g} Hz vs "
+                         f"{folds[0][1].frame_rate:g} Hz")
     tasks = [(label, name, params, est, k, tr, te, unknown_phone) for label, name, params, est in specs
              for k, (tr, te) in enumerate(folds)]
     from tqdm.auto import tqdm

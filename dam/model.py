@@ -220,6 +220,9 @@ class DAM(Synthesizer):
             bad("sigma_init", "use a number > 0 or 'auto'")
         if not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 0:
             bad("max_iter", "use an integer >= 0")
+        for name in ("gn_steps", "min_occurrences", "min_mode_size"):
+            if not isinstance(getattr(self, name), (int, np.integer)) or getattr(self, name) < 1:
+                bad(name, "use an integer >= 1")
 
     # -- training ----------------------------------------------------------
     def _fit(self, corpus: Corpus) -> None:

@@ -22,13 +22,25 @@ import numpy as np
 from .dominance import dominance_dsigma
 from .estep import Occurrences, fitted_values
 
-__all__ = ["SIGMA_MIN", "SIGMA_MAX", "jacobian", "gauss_newton_sigma"]
+__all__ = ["SIGMA_MIN", "SIGMA_MAX", "jacobian", "jacobian_values", "gauss_newton_sigma"]
 
 # sigma is in phone durations: below 1e-3 the fall-off is a step; beyond 2
 # durations (a reach of 6 durations at the default truncation) a phone, a long
 # pause above all, would stand in for a slowly varying offset over many neighbours.
 SIGMA_MIN = 1e-3
 SIGMA_MAX = 2.0
+
+
+def jacobian_values(occ: Occurrences, parts, sigma: np.ndarray) -> np.ndarray:
+    """``dC*/d log(sigma)`` at every (occurrence, frame) pair of ``parts``, shape (n_pairs,).
+
+    ``parts`` is ``(pred, parts)`` from :func:`dam.estep.fitted_values`; the
+    pair's column is its occurrence's mode (see the module docstring).
+    """
+    pred, (k, row, t, D, A, S) = parts
+    s = sigma[occ.mode[k]]
+    dD = dominance_dsigma(t, s, occ.eps, occ.tol) * s
+    return dD * A if not occ.normalize else dD * (A - pred[row]) / S[row]
 
 
 def jacobian(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, parts=None):
@@ -51,11 +63,9 @@ def jacobian(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, parts=None):
 
     if parts is None:
         parts = fitted_values(occ, coef, sigma)
-    pred, (k, row, t, D, A, S) = parts
+    k, row = parts[1][:2]
     mode = occ.mode[k]
-    s = sigma[mode]
-    dD = dominance_dsigma(t, s, occ.eps, occ.tol) * s
-    vals = dD * A if not occ.normalize else dD * (A - pred[row]) / S[row]
+    vals = jacobian_values(occ, parts, sigma)
     nz = vals != 0.0
     J = sparse.csr_matrix((vals[nz], (row[nz], mode[nz])), shape=(occ.n_rows, occ.n_modes))
     J.sum_duplicates()
@@ -85,10 +95,7 @@ def _products(occ, y, cur, coef, sigma, projected):
     from .estep import design_values, gram
 
     pred, (k, row, t, D, A, S) = cur
-    mode = occ.mode[k]
-    s = sigma[mode]
-    dD = dominance_dsigma(t, s, occ.eps, occ.tol) * s
-    jv = dD * A if not occ.normalize else dD * (A - pred[row]) / S[row]
+    jv = jacobian_values(occ, cur, sigma)
     f = y - pred
     if not projected:
         blocks, off = [(jv[:, None], 0)], 0

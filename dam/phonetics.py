@@ -41,18 +41,24 @@ def base_phone(label: str) -> str:
     return _STRESS.sub("", label) if len(label) > 1 else label
 
 
-def phone_class(label: str) -> str | None:
-    """Broad articulatory class of ``label``; ``"silence"``; or None if unknown."""
+def phone_class(label: str, alphabet: str | None = None) -> str | None:
+    """Broad articulatory class of ``label``; ``"silence"``; or None if unknown.
+
+    ``alphabet="arpabet"`` reads upper-case symbols as ARPAbet: ``T D S Z N Y``
+    are /t d s z n j/ there, but /θ ð ʃ ʒ ŋ ʏ/ in SAMPA (the default reading).
+    """
     if label == SILENCE:
         return "silence"
     b = base_phone(label)
-    return _PHONE_TO_CLASS.get(b) or _PHONE_TO_CLASS.get(b.lower()) or _PHONE_TO_CLASS.get(b.rstrip(":"))
+    keys = (b.lower(), b) if alphabet == "arpabet" else (b, b.lower())
+    return _PHONE_TO_CLASS.get(keys[0]) or _PHONE_TO_CLASS.get(keys[1]) or _PHONE_TO_CLASS.get(b.rstrip(":"))
 
 
 def fallback_phone(label: str, counts: dict[str, int], silence: str = SILENCE) -> str | None:
     """The documented fallback chain for a phone never seen in training.
 
-    1. the same phone without stress digits, in any case, if seen (``AA1`` -> ``aa``);
+    1. the same phone without stress digits, if seen, in any case for ARPAbet
+       (``AA1`` -> ``aa``; SAMPA's /S/ and /s/ differ);
     2. the most frequent seen phone of the same broad class (:func:`phone_class`);
     3. silence, if seen.
     Returns None when every step fails.
@@ -60,12 +66,13 @@ def fallback_phone(label: str, counts: dict[str, int], silence: str = SILENCE) -
     b = base_phone(label)
     if b in counts:
         return b
-    same_case = [p for p in counts if p.lower() == b.lower()]
+    alphabet = guess_alphabet([*counts, label])  # the alphabet decides what case means
+    same_case = [p for p in counts if p.lower() == b.lower()] if alphabet == "arpabet" else []
     if same_case:
         return same_case[0]
-    cls = phone_class(label)
+    cls = phone_class(label, alphabet)
     if cls is not None:
-        same = [p for p in counts if phone_class(p) == cls]
+        same = [p for p in counts if phone_class(p, alphabet) == cls]
         if same:
             return max(same, key=lambda p: (counts[p], p))
     return silence if silence in counts else None

@@ -119,3 +119,21 @@ def test_evaluate_matches_hand_computation(split):
     for c in range(Y.shape[1]):
         assert ev.pearson_per_channel[c] == pytest.approx(np.corrcoef(Y[:, c], P[:, c])[0, 1])
     assert len(ev.per_utterance) == len(test)
+
+
+def test_failed_fit_leaves_an_unfitted_model(split):
+    train, test = split
+
+    class Fails(PhoneMean):
+        def _fit(self, corpus):
+            super()._fit(corpus)
+            if getattr(self, "fail", False):
+                raise FloatingPointError("diverged")
+
+    m = Fails().fit(train)
+    m.fail = True
+    with pytest.raises(FloatingPointError):
+        m.fit(train)
+    assert not m.is_fitted() and not [k for k in vars(m) if k.endswith("_")]
+    with pytest.raises(dam.base.NotFittedError):
+        m.predict(test[0].alignment)

@@ -115,3 +115,13 @@ def test_cli_compare(tmp_path, capsys):
     with open(tmp_path / "summary.csv") as fh:
         assert {r["model"] for r in csv.DictReader(fh)} == {"phone-mean", "tree"}
     assert main(["compare", "--models", "phone-mean", "-p", "nomodel.x=1", "--train", "tiny"]) == 1
+
+
+def test_test_corpus_at_another_frame_rate_is_refused(corpora):
+    from dam.data import Corpus, Utterance
+    train, test = corpora
+    fr = 2 * test.frame_rate
+    other = Corpus([Utterance(u.alignment, np.zeros((u.alignment.n_frames(fr), test.n_channels)), fr,
+                              test.channels, name=u.name) for u in test])
+    with pytest.raises(ValueError, match="frame rates differ"):
+        compare(["phone-mean"], train, other, verbose=0)

@@ -183,6 +183,23 @@ def test_jacobian_matches_finite_differences(normalize, extrapolate):
         np.testing.assert_allclose(J[:, b], fd, rtol=1e-5, atol=1e-8)
 
 
+@pytest.mark.parametrize("normalize", [False, True])
+def test_mstep_products_are_those_of_the_jacobian(normalize):
+    # the M-step never forms J: its J^T J, J^T f and X^T J must be the checked Jacobian's
+    from dam.mstep import _products
+    occ, Y = _small_problem(normalize=normalize, seed=5)
+    rng = np.random.default_rng(6)
+    coef, sigma, y = rng.normal(size=(3, 3)), np.array([0.3, 0.5, 0.8]), Y[:, 0]
+    cur = fitted_values(occ, coef, sigma)
+    J = jacobian(occ, coef, sigma, cur).toarray()
+    X = design_matrix(occ, sigma).toarray()
+    f = y - cur[0]
+    H, g, K = _products(occ, y, cur, coef, sigma, projected=True)
+    np.testing.assert_allclose(H, J.T @ J, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(g, J.T @ f, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(K, X.T @ J, rtol=1e-10, atol=1e-12)
+
+
 @pytest.mark.parametrize("projected", [True, False])
 def test_training_error_never_increases(projected):
     occ, Y = _small_problem(seed=3, n_utt=6)

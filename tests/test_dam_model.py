@@ -195,7 +195,7 @@ def test_unknown_phone_errors_or_falls_back():
 def test_bad_hyperparameters_are_refused_by_name():
     corpus = make_corpus(_truth("hold", 0, degree=1), n_utterances=3, random_state=0)
     for kw in ({"degree": -1}, {"extrapolate": "zero"}, {"modes": "kmeans"}, {"sigma_init": -1.0},
-               {"dominance_tol": 1.5}):
+               {"dominance_tol": 1.5}, {"gn_steps": 0}):
         with pytest.raises(ValueError, match=list(kw)[0]):
             DAM(**kw).fit(corpus)
 
@@ -259,6 +259,9 @@ def test_synthetic_generator_is_deterministic_and_renders_the_model():
         np.testing.assert_array_equal(u.trajectory, true.predict(u.alignment))
     a = random_alignment(np.random.default_rng(0), ["a", "b"], n_segments=5, durations={"a": (0.1, 0.1), "b": (0.2, 0.2)})
     assert len(a) == 5 and all(abs(d - {"a": 0.1, "b": 0.2}[p]) < 1e-12 for p, d in zip(a.labels, a.durations))
+    # a model renders only at its own frame rate: another one would mislabel every frame's time
+    with pytest.raises(ValueError, match="frame_rate.*50.*100 Hz"):
+        make_corpus(true, n_utterances=1, frame_rate=50.0, mode_rule=lambda p, left, right: 0)
 
 
 def test_cli_inspect_prints_the_report(tmp_path, capsys):

@@ -159,3 +159,14 @@ def test_guess_alphabet():
     assert guess_alphabet(["a:", "OY", "aI", "S", "sil"]) == "sampa"   # OY is SAMPA too
     assert guess_alphabet(["AH0", "S", "N"]) == "arpabet"
     assert guess_alphabet(["iy", "sh", "sil"]) == "arpabet"
+
+
+def test_fallback_reads_upper_case_arpabet_as_arpabet():
+    from dam.phonetics import fallback_phone, phone_class
+    # ARPAbet T, S, N are alveolar /t s n/; the same letters in SAMPA are /θ ʃ ŋ/.
+    assert [phone_class(p, "arpabet") for p in ("T", "S", "N")] == ["alveolar"] * 3
+    assert [phone_class(p, "sampa") for p in ("T", "S", "N")] == ["dental", "postalveolar", "velar"]
+    mfa = {"D": 3, "DH": 9, "AH0": 5, "NG": 4, "sil": 1}  # an MFA phone set that never saw T or N
+    assert fallback_phone("T", mfa) == "D" and fallback_phone("N", mfa) == "D"
+    vtl = {"Z": 1, "s": 4, "a:": 3, "N": 2}  # German SAMPA: S is /ʃ/
+    assert fallback_phone("S", vtl) == "Z" and fallback_phone("g", vtl) == "N"

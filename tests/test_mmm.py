@@ -159,3 +159,17 @@ def test_concatenated_utterances_solve_as_separate_ones():
     separate = np.concatenate([banded_cholesky_solve(mmm_system(A, g, 3.0), A * m) for A, g, m in parts])
     (_, A, g, m), = _concatenated([(np.zeros(len(A), int), A, g, m) for A, g, m in parts])
     np.testing.assert_allclose(banded_cholesky_solve(mmm_system(A, g, 3.0), A * m), separate, rtol=1e-12)
+
+
+def test_training_start_uses_only_the_given_utterances():
+    from baselines.mmm import _phone_start
+    # two "utterances": phone 0 in both, phone 1 only in the second, phone 2 in neither
+    part1 = (np.array([0, 0]), None, None, np.array([[1.0], [3.0]]))
+    part2 = (np.array([0, 1, 1]), None, None, np.array([[5.0], [-1.0], [1.0]]))
+    mu0, lv0 = _phone_start([part1], 3, 1e-4)
+    # phones without frames in the given part start at the standardised mean 0, variance 1
+    np.testing.assert_allclose(mu0[:, 0], [2.0, 0.0, 0.0])
+    np.testing.assert_allclose(np.exp(lv0[:, 0]), [1.0, 1.0, 1.0])
+    mu0, lv0 = _phone_start([part1, part2], 3, 1e-4)
+    np.testing.assert_allclose(mu0[:, 0], [3.0, 0.0, 0.0])
+    np.testing.assert_allclose(np.exp(lv0[:, 0]), [8 / 3, 1.0, 1.0])

@@ -101,6 +101,13 @@ class NeuralSynthesizer(Synthesizer):
     def _check_network_params(self) -> None:
         """Validate the network's own hyperparameters (override)."""
 
+    def _check_positive_ints(self, *names: str) -> None:
+        """Raise ValueError naming the first of ``names`` that is not a positive integer."""
+        for name in names:
+            v = getattr(self, name)
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
+                raise ValueError(f"{type(self).__name__}: parameter {name!r} is {v!r}; must be a positive integer")
+
     # -- validation ----------------------------------------------------------
     def _check_params(self) -> None:
         cls = type(self).__name__
@@ -108,10 +115,7 @@ class NeuralSynthesizer(Synthesizer):
         def bad(name, rule):
             raise ValueError(f"{cls}: parameter {name!r} is {getattr(self, name)!r}; {rule}")
 
-        for name in ("batch_size", "patience"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
-                bad(name, "must be a positive integer")
+        self._check_positive_ints("batch_size", "patience")
         if not isinstance(self.max_epochs, (int, np.integer)) or self.max_epochs < 0:
             bad("max_epochs", "must be a non-negative integer")
         if not (isinstance(self.learning_rate, (int, float)) and self.learning_rate > 0):
@@ -159,6 +163,7 @@ class NeuralSynthesizer(Synthesizer):
 
         from .train import make_optimizer, network_leaves, train_network
 
+        self._net = self._encoder = None  # caches of a previous fit
         seed = self._seed()
         encoder = make_encoder(self.encoder, corpus)
         self.encoder_state_ = encoder.state()

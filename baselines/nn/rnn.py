@@ -209,10 +209,7 @@ class RecurrentDecoder(NeuralSynthesizer):
         cls = type(self).__name__
         if self.cell not in _CELLS:
             raise ValueError(f"{cls}: parameter 'cell' is {self.cell!r}; use 'gru' or 'lstm'")
-        for name in ("n_layers", "hidden_size", "seq_len"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
-                raise ValueError(f"{cls}: parameter {name!r} is {v!r}; must be a positive integer")
+        self._check_positive_ints("n_layers", "hidden_size", "seq_len")
         if not isinstance(self.dense_size, (int, np.integer)) or self.dense_size < 0:
             raise ValueError(f"{cls}: parameter 'dense_size' is {self.dense_size!r}; must be an integer >= 0")
         if not isinstance(self.bidirectional, (bool, np.bool_)):

@@ -135,10 +135,7 @@ class SlidingDNN(NeuralSynthesizer):
                  "verbose": 0}]
 
     def _check_network_params(self) -> None:
-        for name in ("kx", "ky"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{type(self).__name__}: parameter {name!r} is {v!r}; must be a positive integer")
+        self._check_positive_ints("kx", "ky")
         if self.features not in ("raw", "linguistic"):
             raise ValueError(f"{type(self).__name__}: parameter 'features' is {self.features!r}; "
                              "use 'raw' or 'linguistic'")

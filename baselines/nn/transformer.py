@@ -154,10 +154,7 @@ class TransformerDecoder(NeuralSynthesizer):
 
     def _check_network_params(self) -> None:
         cls = type(self).__name__
-        for name in ("window", "n_layers", "n_heads", "d_model", "d_ff", "window_hop"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
-                raise ValueError(f"{cls}: parameter {name!r} is {v!r}; must be a positive integer")
+        self._check_positive_ints("window", "n_layers", "n_heads", "d_model", "d_ff", "window_hop")
         if self.d_model % self.n_heads:
             raise ValueError(f"{cls}: parameter 'd_model' is {self.d_model}; must be a multiple of "
                              f"n_heads={self.n_heads}")

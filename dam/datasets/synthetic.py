@@ -78,7 +78,8 @@ def make_corpus(model, *, n_utterances: int = 20, phones: Sequence[str] | None =
     noise : float, default 0.0
         Standard deviation of white Gaussian noise added to the trajectories.
     frame_rate, channels : optional
-        Default: the model's.
+        Default: the model's (a model's own frame rate is the only one it renders at;
+        ``frame_rate`` is required for a function).
     random_state : int, default 0
     name : str, default "synthetic"
 
@@ -92,6 +93,10 @@ def make_corpus(model, *, n_utterances: int = 20, phones: Sequence[str] | None =
 
     rng = np.random.default_rng(random_state)
     fr = float(frame_rate if frame_rate is not None else model.frame_rate_)
+    if hasattr(model, "frame_rate_") and fr != float(model.frame_rate_):
+        # a model renders frame i at i / its own frame rate: another rate would mislabel the times
+        raise ValueError(f"parameter 'frame_rate' is {frame_rate!r} but the model synthesizes at "
+                         f"{model.frame_rate_:g} Hz; leave it out or give a function")
     chans = list(channels if channels is not None else model.channels_)
     phones = list(phones if phones is not None else model.phones_)
     utts, all_modes = [], []

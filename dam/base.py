@@ -246,7 +246,7 @@ class Synthesizer:
         """Write the fitted model to ``path`` (npz + JSON; see module docstring)."""
         self._check_fitted()
         arrays: dict[str, np.ndarray] = {}
-        meta = {"format": FORMAT, "version": FORMAT_VERSION, "model": self.name,
+        meta = {"format": FORMAT, "version": FORMAT_VERSION, "model": self.name or type(self).__name__,
                 "class": f"{type(self).__module__}.{type(self).__qualname__}",
                 "dam_version": _version(), "params": _encode(self.get_params(), arrays),
                 "state": _encode(self._get_state(), arrays)}

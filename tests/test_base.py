@@ -137,3 +137,34 @@ def test_failed_fit_leaves_an_unfitted_model(split):
     assert not m.is_fitted() and not [k for k in vars(m) if k.endswith("_")]
     with pytest.raises(dam.base.NotFittedError):
         m.predict(test[0].alignment)
+
+
+def test_conformance_suite_runs_on_an_unregistered_model():
+    from dam import registry
+    from dam.testing import check_synthesizer
+
+    class StudentMean(PhoneMean):
+        """A student's copy of phone-mean, never registered by hand."""
+        name = ""
+        _tags = {"reference": True}
+
+    check_synthesizer(StudentMean())
+    assert registry.get("StudentMean") is StudentMean
+    registry._REGISTRY.pop("StudentMean")
+    registry._LOADED.pop("StudentMean")
+
+
+def test_conformance_suite_catches_a_model_that_ignores_timing():
+    from dam.testing import check_time_shift_equivariance, default_corpora
+
+    class Clock(PhoneMean):
+        """Predicts from absolute frame index: not time-shift equivariant."""
+        name = "clock-test"
+
+        def _predict(self, alignment, n_frames):
+            y = super()._predict(alignment, n_frames)
+            return y + np.sin(np.arange(n_frames) / 3.0)[:, None] * y.std(axis=0)
+
+    train, test = default_corpora()
+    with pytest.raises(AssertionError, match="does not shift"):
+        check_time_shift_equivariance(Clock(), train, test)

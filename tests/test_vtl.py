@@ -212,8 +212,6 @@ def test_module_help_runs():
 # -- the bundled corpus ------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def bundled():
-    if "vtl" not in dam.datasets.names():
-        pytest.skip("the vtl corpus is not registered")
     return dam.datasets.load("vtl", "train"), dam.datasets.load("vtl", "test")
 
 

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam.base import Synthesizer
-from dam.data import Alignment, Corpus
-from dam.features import (fit_transition_clusters, overlap_average, phone_vocabulary, window_features,
+from dam import Synthesizer
+from dam import Alignment, Corpus
+from dam.corpus import (fit_transition_clusters, overlap_average, phone_vocabulary, window_features,
                           window_targets)
 
 __all__ = ["DecisionTree", "tree_to_arrays", "predict_tree_arrays"]

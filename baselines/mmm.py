@@ -34,8 +34,8 @@ import math
 
 import numpy as np
 
-from dam.base import Synthesizer
-from dam.data import Alignment, Corpus
+from dam import Synthesizer
+from dam import Alignment, Corpus
 
 __all__ = ["MMM", "difference_gram_banded", "banded_cholesky_solve", "solve_banded_spd", "mmm_system",
            "synthesis_loss_and_gradient"]

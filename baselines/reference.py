@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam.base import Synthesizer
-from dam.data import Alignment, Corpus
+from dam import Synthesizer
+from dam import Alignment, Corpus
 
 __all__ = ["PhoneMean", "TargetInterpolation"]
 

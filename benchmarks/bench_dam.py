@@ -41,9 +41,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _machine import machine, median_time  # noqa: E402
 
 from baselines.reference import PhoneMean  # noqa: E402
-from dam.data import Alignment  # noqa: E402
+from dam.corpus.data import Alignment  # noqa: E402
 from dam.datasets.synthetic import dam_parameters, make_corpus, random_alignment  # noqa: E402
-from dam.model import DAM  # noqa: E402
+from dam.model.estimator import DAM  # noqa: E402
 
 PHONES = [f"p{i:02d}" for i in range(40)]
 N_CH = 4
@@ -150,7 +150,7 @@ def _estep_compare(model, corpus) -> dict:
     """Normal equations utterance by utterance (used) vs scipy sparse X^T X, one channel's sigmas."""
     from threadpoolctl import threadpool_limits
 
-    from dam.estep import Occurrences, design_matrix, normal_equations, pairs
+    from dam.model.estep import Occurrences, design_matrix, normal_equations, pairs
 
     labels = [u.alignment.labels for u in corpus]
     glob = [np.array([model.phone_modes_[p][0] for p in lab]) for lab in labels]   # first mode of each phone

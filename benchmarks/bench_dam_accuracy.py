@@ -31,8 +31,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _machine import machine  # noqa: E402
 
 import dam  # noqa: E402
-from dam.data import frame_labels  # noqa: E402
-from dam.metrics import evaluate  # noqa: E402
+from dam.corpus.data import frame_labels  # noqa: E402
+from dam.evaluation.metrics import evaluate  # noqa: E402
 
 VARIANTS = [
     ("phone-mean", "phone-mean", {}),
@@ -52,7 +52,7 @@ def split(name: str):
     """The corpus's own train/test splits (bundled, or ``train/`` and ``test/`` of a directory),
     or a 75/25 utterance split."""
     if os.path.isdir(name):
-        from dam.io import load_corpus
+        from dam.corpus.io import load_corpus
         return load_corpus(os.path.join(name, "train")), load_corpus(os.path.join(name, "test"))
     try:
         return dam.datasets.load(name, "train"), dam.datasets.load(name, "test")

@@ -20,7 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import machine, median_time  # noqa: E402
 
 import dam  # noqa: E402
-from dam.io import load_corpus, save_corpus  # noqa: E402
+from dam.corpus.io import load_corpus, save_corpus  # noqa: E402
 
 
 def main(argv=None):

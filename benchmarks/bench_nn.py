@@ -38,8 +38,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _machine import machine  # noqa: E402
 
 import dam  # noqa: E402
-from dam.compare import bootstrap_rmse_ci  # noqa: E402
-from dam.metrics import evaluate  # noqa: E402
+from dam.evaluation.compare import bootstrap_rmse_ci  # noqa: E402
+from dam.evaluation.metrics import evaluate  # noqa: E402
 
 # label -> (registry name, params); the defaults of each network, plus Medina's GRU variants.
 MODELS = {

@@ -5,46 +5,42 @@ trajectories come out. The core is the Dominated Animeme Model (Chen et al.
 2012); beside it stand the models it is compared with, all behind one
 interface (:class:`dam.Synthesizer`).
 
-``import dam`` is light: it imports numpy only. Everything else (scipy,
-scikit-learn, matplotlib, jax) is imported by the piece that needs it.
+The package's floors, bottom up: :mod:`dam.corpus` (data model and file formats),
+:mod:`dam.base` / :mod:`dam.modelfile` / :mod:`dam.registry` (the one interface),
+:mod:`dam.model` (the DAM), :mod:`dam.datasets` and :mod:`dam.crossmap`,
+:mod:`dam.evaluation`, :mod:`dam.testing` (the conformance suite), and the command
+line :mod:`dam.cli` on top. ``import dam`` is light: it imports numpy only;
+scipy, scikit-learn, matplotlib and jax are imported by the piece that needs them.
+
+Examples
+--------
+>>> import dam
+>>> train = dam.datasets.load("tiny")
+>>> model = dam.make("phone-mean").fit(train)
+>>> model.predict(train[0].alignment).shape == train[0].trajectory.shape
+True
 """
 from __future__ import annotations
 
-__version__ = "0.1.0"
+from dam import _compat
+from dam._lazy import lazy_exports
+from dam._version import __version__
+from dam.base import ConvergenceWarning, NotFittedError, Synthesizer, UnknownPhoneError, clone
+from dam.corpus.data import SILENCE, Alignment, Corpus, DataError, Utterance
+from dam.modelfile import ModelFileError, load
+from dam.registry import make, register
 
-from .data import SILENCE, Alignment, Corpus, DataError, Utterance  # noqa: E402
-from .base import ModelFileError, NotFittedError, Synthesizer, UnknownPhoneError, load  # noqa: E402
-from .registry import register  # noqa: E402
+_compat.install()
 
-_LAZY = {
-    "load_corpus": ("dam.io", "load_corpus"),
-    "save_corpus": ("dam.io", "save_corpus"),
-    "read_alignment": ("dam.io", "read_alignment"),
-    "evaluate": ("dam.metrics", "evaluate"),
-    "datasets": ("dam.datasets", None),
-    "testing": ("dam.testing", None),
-    "registry": ("dam.registry", None),
+_EXPORTS = {
+    **dict.fromkeys(["load_corpus", "save_corpus", "read_alignment"], "dam.corpus.io"),
+    "evaluate": "dam.evaluation.metrics",
+    "compare": "dam.evaluation.compare",
 }
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        import importlib
-        module, attr = _LAZY[name]
-        mod = importlib.import_module(module)
-        return mod if attr is None else getattr(mod, attr)
-    raise AttributeError(f"module 'dam' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(list(globals()) + list(_LAZY))
-
-
-def make(name: str, **params) -> Synthesizer:
-    """A registered synthesizer by name: ``dam.make("dam", degree=4)``."""
-    from .registry import get
-    return get(name)(**params)
-
+_SUBMODULES = ("corpus", "model", "evaluation", "crossmap", "datasets", "testing", "registry", "base",
+               "modelfile")
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
 __all__ = ["Alignment", "Utterance", "Corpus", "Synthesizer", "DataError", "NotFittedError",
-           "ModelFileError", "UnknownPhoneError", "SILENCE", "load", "make", "register", *_LAZY]
+           "ModelFileError", "UnknownPhoneError", "ConvergenceWarning", "SILENCE", "clone", "load", "make",
+           "register", "__version__", *_EXPORTS]

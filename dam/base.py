@@ -1,4 +1,4 @@
-"""The one interface every synthesizer follows, and the model file format.
+"""The one interface every synthesizer follows.
 
 A synthesizer is a scikit-learn style estimator: ``__init__`` stores
 keyword-only hyperparameters and does nothing else; ``fit(corpus)`` learns
@@ -7,38 +7,22 @@ attributes whose names end in ``_`` and returns ``self``;
 at the training frame rate (a list in, a list out).
 
 Subclasses implement ``_fit(corpus)`` and ``_predict(alignment, n_frames)``;
-the base class does the validation, the bookkeeping and the file format.
-
-Model file format (version 1)
------------------------------
-A ``.npz`` archive (zip of ``.npy`` arrays, read with ``allow_pickle=False``):
-
-* ``__dam__``: uint8 array holding UTF-8 JSON
-  ``{"format": "dam-model", "version": 1, "model": <registry name>,
-  "params": {...}, "state": {...}, "dam_version": ...}``.
-  In ``state``, an array is referenced as ``{"__array__": "<key>"}``.
-* every other key: a numeric array of the learned state.
-
-Nothing is ever unpickled; a file that is not such an archive is refused.
+the base class does the validation and the bookkeeping, and
+:mod:`dam.modelfile` the file format.
 """
 from __future__ import annotations
 
+import copy
 import inspect
-import json
 import os
-import zipfile
-from typing import Any
 
 import numpy as np
 
-from .data import Alignment, Corpus, DataError
-
-FORMAT = "dam-model"
-FORMAT_VERSION = 1
-META_KEY = "__dam__"
+from dam.corpus.data import Alignment, Corpus, DataError
+from dam.modelfile import ModelFileError, load, write_model_file
 
 __all__ = ["Synthesizer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
-           "load", "FORMAT_VERSION"]
+           "clone", "load"]
 
 
 class NotFittedError(RuntimeError, AttributeError):
@@ -48,10 +32,6 @@ class NotFittedError(RuntimeError, AttributeError):
 class ConvergenceWarning(UserWarning):
     """An iterative fit stopped at its iteration limit before meeting its tolerance
     (as scikit-learn's, without importing scikit-learn)."""
-
-
-class ModelFileError(ValueError):
-    """A model file that is corrupt, foreign or from an unknown version."""
 
 
 class UnknownPhoneError(DataError):
@@ -215,7 +195,7 @@ class Synthesizer:
                 continue
             sub = None
             if unknown_phone == "fallback":
-                from .phonetics import fallback_phone
+                from dam.corpus.phonetics import fallback_phone
                 sub = fallback_phone(lab, counts, alignment.silence)
             elif unknown_phone != "error":
                 raise ValueError(f"{type(self).__name__}: parameter 'unknown_phone' is {unknown_phone!r}; "
@@ -230,7 +210,7 @@ class Synthesizer:
 
     def score(self, corpus: Corpus) -> float:
         """Negative overall RMSE on ``corpus`` (higher is better, as scikit-learn scorers)."""
-        from .metrics import evaluate
+        from dam.evaluation.metrics import evaluate
         return -evaluate(self, corpus).rmse
 
     # -- persistence -------------------------------------------------------
@@ -243,17 +223,9 @@ class Synthesizer:
             setattr(self, k, v)
 
     def save(self, path: str | os.PathLike) -> None:
-        """Write the fitted model to ``path`` (npz + JSON; see module docstring)."""
+        """Write the fitted model to ``path`` (npz + JSON; see :mod:`dam.modelfile`)."""
         self._check_fitted()
-        arrays: dict[str, np.ndarray] = {}
-        meta = {"format": FORMAT, "version": FORMAT_VERSION, "model": self.name or type(self).__name__,
-                "class": f"{type(self).__module__}.{type(self).__qualname__}",
-                "dam_version": _version(), "params": _encode(self.get_params(), arrays),
-                "state": _encode(self._get_state(), arrays)}
-        arrays[META_KEY] = np.frombuffer(json.dumps(meta).encode("utf-8"), dtype=np.uint8)
-        path = os.fspath(path)
-        with open(path, "wb") as fh:  # a file handle keeps numpy from appending ".npz"
-            np.savez_compressed(fh, **arrays)
+        write_model_file(self, path)
 
     @classmethod
     def load(cls, path) -> "Synthesizer":
@@ -263,6 +235,11 @@ class Synthesizer:
         return model
 
 
+def clone(estimator: Synthesizer) -> Synthesizer:
+    """An unfitted copy of ``estimator`` with the same hyperparameters (deep-copied)."""
+    return type(estimator)(**copy.deepcopy(estimator.get_params()))
+
+
 def _same(a, b) -> bool:
     try:
         return bool(a == b) if not isinstance(a, np.ndarray) else False
@@ -270,107 +247,3 @@ def _same(a, b) -> bool:
         return False
 
 
-def _version() -> str:
-    from . import __version__
-    return __version__
-
-
-def _encode(obj: Any, arrays: dict) -> Any:
-    """JSON-able form of ``obj``; arrays go to ``arrays`` and are referenced."""
-    if isinstance(obj, np.ndarray) or (hasattr(obj, "__array__") and not isinstance(obj, (str, bytes))
-                                       and not np.isscalar(obj)):
-        arr = np.asarray(obj)
-        if arr.dtype == object:
-            raise TypeError("object arrays cannot be saved; convert to numeric or a list of str")
-        key = f"a{len(arrays)}"
-        arrays[key] = arr
-        return {"__array__": key}
-    if isinstance(obj, dict):
-        if not all(isinstance(k, str) for k in obj):
-            return {"__dict_items__": [[_encode(k, arrays), _encode(v, arrays)] for k, v in obj.items()]}
-        return {k: _encode(v, arrays) for k, v in obj.items()}
-    if isinstance(obj, tuple):
-        return {"__tuple__": [_encode(v, arrays) for v in obj]}
-    if isinstance(obj, list):
-        return [_encode(v, arrays) for v in obj]
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.floating,)):
-        return float(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if obj is None or isinstance(obj, (str, int, float, bool)):
-        return obj
-    raise TypeError(f"cannot save a value of type {type(obj).__name__}; override _get_state")
-
-
-def _decode(obj: Any, arrays) -> Any:
-    if isinstance(obj, dict):
-        if "__array__" in obj and len(obj) == 1:
-            return np.array(arrays[obj["__array__"]])
-        if "__tuple__" in obj and len(obj) == 1:
-            return tuple(_decode(v, arrays) for v in obj["__tuple__"])
-        if "__dict_items__" in obj and len(obj) == 1:
-            return {_decode(k, arrays): _decode(v, arrays) for k, v in obj["__dict_items__"]}
-        return {k: _decode(v, arrays) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_decode(v, arrays) for v in obj]
-    return obj
-
-
-def read_model_file(path) -> tuple[dict, Any]:
-    """Open and check a model file; return ``(meta, arrays)``. numpy only."""
-    path = os.fspath(path)
-    if not os.path.exists(path):
-        raise ModelFileError(f"{path}: no such model file")
-    with open(path, "rb") as fh:
-        magic = fh.read(4)
-    if magic != b"PK\x03\x04":
-        raise ModelFileError(f"{path}: not a dam model file (it is not an npz archive; first bytes {magic!r}); "
-                             "write model files with model.save(path) or `dam fit`")
-    try:
-        arrays = np.load(path, allow_pickle=False)
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
-        raise ModelFileError(f"{path}: not a dam model file (not a readable npz archive: {exc})") from None
-    if not hasattr(arrays, "files") or META_KEY not in arrays.files:
-        raise ModelFileError(f"{path}: not a dam model file (field {META_KEY!r} missing); "
-                             "write model files with model.save(path) or `dam fit`")
-    try:
-        meta = json.loads(bytes(arrays[META_KEY]).decode("utf-8"))
-    except Exception as exc:
-        raise ModelFileError(f"{path}: field {META_KEY!r} is not valid JSON ({exc})") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise ModelFileError(f"{path}: field 'format' is {meta.get('format') if isinstance(meta, dict) else meta!r}, "
-                             f"expected {FORMAT!r}")
-    version = meta.get("version")
-    if not isinstance(version, int) or version > FORMAT_VERSION or version < 1:
-        raise ModelFileError(f"{path}: field 'version' is {version!r}; this dam reads versions 1..{FORMAT_VERSION}"
-                             " (upgrade dam to read newer files)")
-    for fld in ("model", "params", "state"):
-        if fld not in meta:
-            raise ModelFileError(f"{path}: field {fld!r} missing")
-    return meta, arrays
-
-
-def load(path) -> Synthesizer:
-    """Load a model written by ``Synthesizer.save``.
-
-    Raises
-    ------
-    ModelFileError
-        The file is missing, corrupt, foreign or of an unknown version.
-    """
-    from .registry import get
-    meta, arrays = read_model_file(path)
-    try:
-        cls = get(meta["model"])
-    except KeyError as exc:
-        raise ModelFileError(f"{path}: field 'model' is {meta['model']!r}, which is not registered ({exc})") from None
-    try:
-        params = _decode(meta["params"], arrays)
-        state = _decode(meta["state"], arrays)
-        model = cls(**params)
-        model._set_state(state)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ModelFileError(f"{path}: the stored {meta['model']!r} model is damaged ({type(exc).__name__}: {exc})") from None
-    return model

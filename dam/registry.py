@@ -1,32 +1,25 @@
 """The explicit registry: model name -> synthesizer class.
 
 Entries are ``"module:Class"`` strings so that listing models imports
-nothing heavy; a class is imported only when it is asked for. Third-party
-models register with :func:`register` or through the ``dam.synthesizers``
-entry-point group.
+nothing heavy; a class is imported only when it is asked for. dam's own
+models are listed here; every other synthesizer, the ones in ``baselines/``
+included, comes in through the ``dam.synthesizers`` entry-point group
+(``pyproject.toml`` lists the baselines there, so that dam never imports
+them), or at run time with :func:`register`.
 """
 from __future__ import annotations
 
 import importlib
 
-# name -> "module:Class". Keep sorted by family: references, DAM, classical, neural.
+# name -> "module:Class": dam's own; the entry points follow in the order pyproject.toml lists them.
 _REGISTRY: dict[str, str] = {
-    "phone-mean": "baselines.reference:PhoneMean",
-    "target-interpolation": "baselines.reference:TargetInterpolation",
-    "dam": "dam.model:DAM",
-    "dam-m0": "dam.model:DAMM0",
-    "cohen-massaro": "baselines.cohen_massaro:CohenMassaro",
-    "mmm": "baselines.mmm:MMM",
-    "dtree": "baselines.dtree:DecisionTree",
-    "sliding-dnn": "baselines.nn.sliding_dnn:SlidingDNN",
-    "lstm": "baselines.nn.lstm:FanLSTM",
-    "causal-mlp": "baselines.nn.causal_mlp:CausalMLP",
-    "gru": "baselines.nn.rnn:RecurrentDecoder",
-    "transformer": "baselines.nn.transformer:TransformerDecoder",
+    "dam": "dam.model.estimator:DAM",
+    "dam-m0": "dam.model.estimator:DAMM0",
 }
 _LOADED: dict[str, type] = {}
+_ENTRY_POINTS_READ = False
 
-__all__ = ["register", "get", "names", "available"]
+__all__ = ["register", "get", "names", "available", "make"]
 
 
 def register(name: str, cls_or_path) -> None:
@@ -40,6 +33,10 @@ def register(name: str, cls_or_path) -> None:
 
 
 def _entry_points() -> None:
+    global _ENTRY_POINTS_READ
+    if _ENTRY_POINTS_READ:
+        return
+    _ENTRY_POINTS_READ = True
     try:
         from importlib.metadata import entry_points
         for ep in entry_points(group="dam.synthesizers"):
@@ -58,8 +55,7 @@ def get(name: str) -> type:
     """The class registered under ``name``; KeyError with the known names otherwise."""
     if name in _LOADED:
         return _LOADED[name]
-    if name not in _REGISTRY:
-        _entry_points()
+    _entry_points()
     if name not in _REGISTRY:
         raise KeyError(f"unknown model {name!r}; known models: {', '.join(_REGISTRY)} (see `dam models`)")
     module, _, qual = _REGISTRY[name].partition(":")
@@ -77,3 +73,8 @@ def available(name: str) -> tuple[bool, str]:
         return True, ""
     except ImportError as exc:
         return False, str(exc)
+
+
+def make(name: str, **params):
+    """A registered synthesizer by name: ``dam.make("dam", degree=4)``."""
+    return get(name)(**params)

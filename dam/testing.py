@@ -26,23 +26,18 @@ import tempfile
 
 import numpy as np
 
-from .base import NotFittedError, Synthesizer, UnknownPhoneError
-from .data import Alignment, Corpus
+from dam.base import NotFittedError, Synthesizer, UnknownPhoneError, clone
+from dam.corpus.data import Alignment, Corpus
 
 __all__ = ["check_synthesizer", "all_checks", "clone", "default_corpora"]
 
 _FIT_CACHE: dict = {}
 
 
-def clone(estimator: Synthesizer) -> Synthesizer:
-    """An unfitted copy with the same hyperparameters."""
-    return type(estimator)(**copy.deepcopy(estimator.get_params()))
-
-
 def default_corpora() -> tuple[Corpus, Corpus]:
     """The bundled ``tiny`` corpus split into train and test (fixed seed)."""
     if "tiny" not in _FIT_CACHE:
-        from . import datasets
+        import dam.datasets as datasets
         _FIT_CACHE["tiny"] = datasets.load("tiny").train_test_split(0.25, random_state=0)
     return _FIT_CACHE["tiny"]
 
@@ -147,8 +142,8 @@ def check_refit_idempotent(estimator, train, test):
 
 
 def check_save_load_roundtrip(estimator, train, test):
-    from .base import load
-    from .registry import _REGISTRY, register
+    from dam.base import load
+    from dam.registry import _REGISTRY, register
     name = estimator.name or type(estimator).__name__
     if name not in _REGISTRY:  # a student's model: files name their model, so it must be registered
         register(name, type(estimator))
@@ -235,10 +230,10 @@ def check_beats_phone_mean(estimator, train, test):
     """Held-out RMSE below the per-phone-mean baseline on the bundled corpus."""
     if type(estimator).get_tags().get("reference"):
         return
-    from baselines.reference import PhoneMean
-    from .metrics import evaluate
+    from dam.evaluation.metrics import evaluate
+    from dam.registry import make
     ours = evaluate(_fitted(estimator, train), test).rmse
-    ref = evaluate(_fitted(PhoneMean(), train), test).rmse
+    ref = evaluate(_fitted(make("phone-mean"), train), test).rmse
     assert ours < ref, f"{_name(estimator)}: held-out RMSE {ours:.4g} does not beat phone-mean {ref:.4g}"
 
 

@@ -20,7 +20,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from dam.compare import DEMO_MODELS, compare  # noqa: E402
+from dam.evaluation.compare import DEMO_MODELS, compare  # noqa: E402
 
 
 def main(argv=None):

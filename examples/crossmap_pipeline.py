@@ -51,12 +51,12 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import dam  # noqa: E402
-from dam.crossmap import CrossMapper, blend_weights, fit_controls  # noqa: E402
-from dam.data import Corpus  # noqa: E402
-from dam.metrics import pearson_per_channel, rmse_per_channel  # noqa: E402
-from dam.outlines import outline_corpus, plot_outline, toy_tract_rig  # noqa: E402
-from dam.retarget import RigSpaceRetargeter  # noqa: E402
-from dam.rig import LinearRig  # noqa: E402
+from dam.crossmap.crossmapping import CrossMapper, blend_weights, fit_controls  # noqa: E402
+from dam.corpus.data import Corpus  # noqa: E402
+from dam.evaluation.metrics import pearson_per_channel, rmse_per_channel  # noqa: E402
+from dam.crossmap.outlines import outline_corpus, plot_outline, toy_tract_rig  # noqa: E402
+from dam.crossmap.retarget import RigSpaceRetargeter  # noqa: E402
+from dam.crossmap.rig import LinearRig  # noqa: E402
 
 CONTOURS = ("upper", "lower", "tongue")
 N_POINTS = 12
@@ -87,7 +87,7 @@ def tract_corpora(minutes: float, cache: str, seed: int = 0) -> tuple[Corpus, Co
         log(f"captured motion: bundled vtl corpus, {n} training phrases ({total:.0f} s)")
         return train[:n], test[:1]
     from dam.datasets.vtl import generate_vtl_corpus
-    from dam.io import load_corpus
+    from dam.corpus.io import load_corpus
     root = os.path.join(cache, f"vtl-{minutes:g}min-seed{seed}")
     paths = [os.path.join(root, s) for s in ("train", "test")]
     if all(os.path.exists(os.path.join(p, "corpus.json")) for p in paths):

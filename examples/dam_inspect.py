@@ -29,7 +29,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import dam  # noqa: E402
-from dam.model import DAM  # noqa: E402
+from dam.model.estimator import DAM  # noqa: E402
 
 
 def main(argv=None):

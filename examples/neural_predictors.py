@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import dam  # noqa: E402
-from dam.metrics import evaluate  # noqa: E402
+from dam.evaluation.metrics import evaluate  # noqa: E402
 
 SMALL = {  # for the tiny corpus: small networks, more epochs
     "sliding-dnn": {"hidden_layer_sizes": (64, 64), "dropout": 0.2, "max_epochs": 60, "patience": 8},

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam.data import Alignment, Corpus
+from dam import Alignment, Corpus
 
 __all__ = ["PhoneEncoder", "ENCODERS", "make_encoder", "encoder_from_state"]
 
@@ -50,7 +50,7 @@ class PhoneEncoder:
 
     @classmethod
     def fit(cls, corpus: Corpus) -> "PhoneEncoder":
-        from dam.features import phone_vocabulary
+        from dam.corpus import phone_vocabulary
         return cls(phone_vocabulary(corpus))
 
     def state(self) -> dict:
@@ -62,7 +62,7 @@ class PhoneEncoder:
 
     def frames(self, alignment: Alignment, frame_rate: float, n_frames: int) -> np.ndarray:
         """One-hot phone of every frame, shape (n_frames, len(vocabulary)), uint8."""
-        from dam.features import frame_phone_indices
+        from dam.corpus import frame_phone_indices
         idx = frame_phone_indices(alignment, frame_rate, n_frames, self.vocabulary)
         out = np.zeros((n_frames, len(self.vocabulary)), np.uint8)
         out[np.arange(n_frames), idx] = 1
@@ -71,7 +71,7 @@ class PhoneEncoder:
     def windows(self, alignment: Alignment, frame_rate: float, n_frames: int, *, k: int,
                 align: str = "center", features: str = "raw") -> np.ndarray:
         """Features of the ``k``-frame window of every frame (:func:`dam.features.window_features`), uint8."""
-        from dam.features import window_features
+        from dam.corpus import window_features
         return window_features(alignment, frame_rate, n_frames, self.vocabulary, kx=k, features=features,
                                align=align).astype(np.uint8)
 

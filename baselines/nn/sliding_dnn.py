@@ -157,12 +157,12 @@ class SlidingDNN(NeuralSynthesizer):
                                features=self.features)
 
     def _samples(self, encoder, utterance, y):
-        from dam.features import window_targets
+        from dam.corpus import window_targets
         X = self._inputs(encoder, utterance.alignment, utterance.n_frames)
         Y = window_targets(y, ky=self.ky, align=self._align).astype(np.float32)
         return X, Y, np.ones(len(X), np.float32)
 
     def _forward(self, network, encoder, alignment, n_frames):
-        from dam.features import overlap_average
+        from dam.corpus import overlap_average
         windows = predict_padded(network, self._inputs(encoder, alignment, n_frames))
         return overlap_average(windows, self.ky, len(self.channels_), align=self._align)

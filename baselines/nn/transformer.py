@@ -171,13 +171,13 @@ class TransformerDecoder(NeuralSynthesizer):
         return X.reshape(n_frames, self.window, -1)
 
     def _samples(self, encoder, utterance, y):
-        from dam.features import window_targets
+        from dam.corpus import window_targets
         X = self._inputs(encoder, utterance.alignment, utterance.n_frames)
         Y = window_targets(y, ky=self.window, align="center").astype(np.float32)
         keep = slice(None, None, int(self.window_hop))
         return X[keep], Y[keep], np.ones(len(X[keep]), np.float32)
 
     def _forward(self, network, encoder, alignment, n_frames):
-        from dam.features import overlap_average
+        from dam.corpus import overlap_average
         windows = predict_padded(network, self._inputs(encoder, alignment, n_frames))
         return overlap_average(windows, self.window, len(self.channels_), align="center")

@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..data import Corpus
+from dam.corpus.data import Corpus
 
 DATA = Path(__file__).parent / "data"
 
@@ -106,7 +106,7 @@ def load(name: str, split: str | None = None) -> Corpus:
 
     A corpus with splits and ``split=None`` loads the ``train`` split.
     """
-    from ..io import load_corpus
+    from dam.corpus.io import load_corpus
     d = _get(name)
     if split is None and d.splits:
         split = "train" if "train" in d.splits else d.splits[0]
@@ -119,8 +119,8 @@ def resolve(spec) -> Corpus:
     A path that exists wins over a bundled name; anything else is an error
     that lists both possibilities.
     """
-    from ..data import DataError
-    from ..io import load_corpus
+    from dam.corpus.data import DataError
+    from dam.corpus.io import load_corpus
     s = str(spec)
     if Path(s).is_dir():
         return load_corpus(s)

@@ -22,7 +22,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..data import Alignment, Corpus, Utterance
+from dam.corpus.data import Alignment, Corpus, Utterance
 
 __all__ = ["random_alignment", "make_corpus", "dam_parameters"]
 
@@ -89,7 +89,7 @@ def make_corpus(model, *, n_utterances: int = 20, phones: Sequence[str] | None =
         ``metadata["modes"]`` holds the true local modes per utterance when
         ``mode_rule`` was given; ``metadata["noise"]`` the noise level.
     """
-    from ..astar import BOUNDARY
+    from dam.model.astar import BOUNDARY
 
     rng = np.random.default_rng(random_state)
     fr = float(frame_rate if frame_rate is not None else model.frame_rate_)

@@ -17,7 +17,7 @@ import sys
 
 import numpy as np
 
-from ..data import SILENCE, Alignment, Corpus, Utterance
+from dam.corpus.data import SILENCE, Alignment, Corpus, Utterance
 
 CHANNELS = ("lip_aperture", "lip_protrusion", "jaw_open", "tongue_tip")
 # phone: (targets per channel, stiffness in 1/s^2 of the tracking system)
@@ -99,7 +99,7 @@ def generate(n_utterances=30, seed=0, noise=0.005) -> Corpus:
 
 
 def main(argv=None):
-    from ..io import save_corpus
+    from dam.corpus.io import save_corpus
     out = (argv or sys.argv[1:] or ["dam/datasets/data/tiny"])[0]
     corpus = generate()
     save_corpus(corpus, out, decimals=5)

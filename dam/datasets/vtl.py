@@ -39,7 +39,6 @@ scipy; pandas only for :func:`extract_articubench_lexicon`.
 """
 from __future__ import annotations
 
-import argparse
 import gzip
 import json
 import math
@@ -54,7 +53,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..data import Alignment, Corpus, DataError, Utterance
+from dam.corpus.data import Alignment, Corpus, DataError, Utterance
 
 __all__ = [
     "VTL_CHANNELS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",
@@ -474,7 +473,7 @@ def _write_split(results: list[dict], plans: list[PhrasePlan], directory: Path, 
                  trajectory_format: str, decimals: int, audio_rate: int, metadata: dict) -> Corpus:
     from scipy.io import wavfile
 
-    from ..io import write_csv, write_npy, write_textgrid
+    from dam.corpus.io import write_csv, write_npy, write_textgrid
 
     directory.mkdir(parents=True, exist_ok=True)
     utts = []
@@ -624,89 +623,3 @@ def _package_version() -> str:
         return version("vocaltractlab-cython")
     except PackageNotFoundError:
         return "unknown"
-
-
-# -- command line --------------------------------------------------------------
-def add_generate_arguments(p: argparse.ArgumentParser, *, quiet: bool = True) -> None:
-    """The options of ``generate`` (shared with ``dam generate-vtl``, which has its own ``-q``)."""
-    p.add_argument("out_dir", help="directory that receives train/ and test/")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--train-minutes", type=float, default=10.0, dest="n_train_minutes", metavar="MIN",
-                   help="speech in train/, pauses included (default 10)")
-    p.add_argument("--test-minutes", type=float, default=2.5, dest="n_test_minutes", metavar="MIN",
-                   help="speech in test/ (default 2.5)")
-    p.add_argument("--test-word-fraction", type=float, default=0.2, metavar="F",
-                   help="share of the words kept for test/ only (default 0.2)")
-    p.add_argument("--frame-rate", type=float, default=100.0, metavar="HZ",
-                   help="output frame rate, at most 400.9 (default 100)")
-    p.add_argument("--audio-fraction", type=float, default=0.05, metavar="F",
-                   help="share of phrases that also get 16 kHz audio (default 0.05; audio costs "
-                        "~4 s of CPU per second of speech)")
-    p.add_argument("--format", choices=("npy", "csv"), default="npy", dest="trajectory_format",
-                   help="trajectory files: float32 .npy (default) or .csv")
-    p.add_argument("-j", "--n-jobs", type=int, default=1, metavar="N",
-                   help="worker processes, -1 for all cores (default 1)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing train/ and test/")
-    if quiet:
-        p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
-
-
-_DESCRIPTION = ("Generate an articulatory corpus with VocalTractLab: phrases of German words (phones and "
-                "durations measured in real speech), varied speaking rate and pauses, synthesized into VTL's "
-                "19 tract parameters at --frame-rate, some with 16 kHz audio; train/ and test/ use disjoint "
-                "words. Same seed, same files.")
-_EPILOG = "the bundled corpus: python -m dam.datasets.vtl generate dam/datasets/data/vtl --seed 0 --overwrite"
-
-
-def add_generate_vtl(sub) -> None:
-    """``dam generate-vtl``: the subcommand adder for :mod:`dam.cli`."""
-    p = sub.add_parser("generate-vtl", help="generate a VocalTractLab articulatory corpus (needs dam[vtl])",
-                       description=_DESCRIPTION, epilog=_EPILOG)
-    add_generate_arguments(p, quiet=False)
-    p.set_defaults(func=_cmd_generate_vtl)
-
-
-def _cmd_generate_vtl(args) -> int:
-    run_generate(args)
-    return 0
-
-
-def run_generate(args) -> dict[str, Corpus]:
-    corpora = generate_vtl_corpus(
-        args.out_dir, seed=args.seed, n_train_minutes=args.n_train_minutes,
-        n_test_minutes=args.n_test_minutes, test_word_fraction=args.test_word_fraction,
-        frame_rate=args.frame_rate, audio_fraction=args.audio_fraction,
-        trajectory_format=args.trajectory_format, n_jobs=args.n_jobs,
-        verbose=0 if getattr(args, "quiet", False) else 1,
-        overwrite=args.overwrite)
-    for split, c in corpora.items():
-        print(f"{split}: {c!r} -> {c.source}")
-    return corpora
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m dam.datasets.vtl",
-        description="Generate articulatory corpora with VocalTractLab (German phrases, 19 tract parameters).")
-    sub = parser.add_subparsers(dest="command", required=True)
-    gen = sub.add_parser("generate", help="synthesize a corpus with train/ and test/ parts",
-                         description=_DESCRIPTION, epilog=_EPILOG)
-    add_generate_arguments(gen)
-    lex = sub.add_parser("lexicon", help="extract the word list from articubench's lexical_embedding_vectors.pkl")
-    lex.add_argument("pkl", help="path to articubench/data/lexical_embedding_vectors.pkl")
-    lex.add_argument("--out", default=str(LEXICON_PATH))
-    args = parser.parse_args(argv)
-    try:
-        if args.command == "generate":
-            run_generate(args)
-        else:
-            n = extract_articubench_lexicon(args.pkl, args.out)
-            print(f"wrote {n} words to {args.out}")
-    except (DataError, ImportError, OSError) as exc:  # one line, as `dam` prints it; no traceback
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
-        return 1
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,78 @@
+"""``dam generate-vtl`` and ``dam vtl-lexicon``: make the bundled articulatory corpus again."""
+from __future__ import annotations
+
+import argparse
+
+from dam.datasets.vtl import LEXICON_PATH, extract_articubench_lexicon, generate_vtl_corpus
+
+
+def add_generate_arguments(p: argparse.ArgumentParser, *, quiet: bool = True) -> None:
+    """The options of ``generate`` (shared with ``dam generate-vtl``, which has its own ``-q``)."""
+    p.add_argument("out_dir", help="directory that receives train/ and test/")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--train-minutes", type=float, default=10.0, dest="n_train_minutes", metavar="MIN",
+                   help="speech in train/, pauses included (default 10)")
+    p.add_argument("--test-minutes", type=float, default=2.5, dest="n_test_minutes", metavar="MIN",
+                   help="speech in test/ (default 2.5)")
+    p.add_argument("--test-word-fraction", type=float, default=0.2, metavar="F",
+                   help="share of the words kept for test/ only (default 0.2)")
+    p.add_argument("--frame-rate", type=float, default=100.0, metavar="HZ",
+                   help="output frame rate, at most 400.9 (default 100)")
+    p.add_argument("--audio-fraction", type=float, default=0.05, metavar="F",
+                   help="share of phrases that also get 16 kHz audio (default 0.05; audio costs "
+                        "~4 s of CPU per second of speech)")
+    p.add_argument("--format", choices=("npy", "csv"), default="npy", dest="trajectory_format",
+                   help="trajectory files: float32 .npy (default) or .csv")
+    p.add_argument("-j", "--n-jobs", type=int, default=1, metavar="N",
+                   help="worker processes, -1 for all cores (default 1)")
+    p.add_argument("--overwrite", action="store_true", help="replace existing train/ and test/")
+    if quiet:
+        p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+
+
+_DESCRIPTION = ("Generate an articulatory corpus with VocalTractLab: phrases of German words (phones and "
+                "durations measured in real speech), varied speaking rate and pauses, synthesized into VTL's "
+                "19 tract parameters at --frame-rate, some with 16 kHz audio; train/ and test/ use disjoint "
+                "words. Same seed, same files.")
+_EPILOG = "the bundled corpus: dam generate-vtl dam/datasets/data/vtl --seed 0 --overwrite -j 2"
+
+
+def add_generate_vtl(sub) -> None:
+    p = sub.add_parser("generate-vtl", help="generate a VocalTractLab articulatory corpus (needs dam[vtl])",
+                       description=_DESCRIPTION, epilog=_EPILOG)
+    add_generate_arguments(p, quiet=False)
+    p.set_defaults(func=_cmd_generate_vtl)
+
+
+def _cmd_generate_vtl(args) -> int:
+    run_generate(args)
+    return 0
+
+
+def run_generate(args) -> dict:
+    corpora = generate_vtl_corpus(
+        args.out_dir, seed=args.seed, n_train_minutes=args.n_train_minutes,
+        n_test_minutes=args.n_test_minutes, test_word_fraction=args.test_word_fraction,
+        frame_rate=args.frame_rate, audio_fraction=args.audio_fraction,
+        trajectory_format=args.trajectory_format, n_jobs=args.n_jobs,
+        verbose=0 if getattr(args, "quiet", False) else 1,
+        overwrite=args.overwrite)
+    for split, c in corpora.items():
+        print(f"{split}: {c!r} -> {c.source}")
+    return corpora
+
+
+def add_vtl_lexicon(sub) -> None:
+    p = sub.add_parser("vtl-lexicon", help="extract the VTL word list from articubench (maintainers)",
+                       description="Extract the word list of the vtl corpus generator from articubench's "
+                                   "data/lexical_embedding_vectors.pkl (needs pandas).")
+    p.add_argument("pkl", help="path to articubench/data/lexical_embedding_vectors.pkl")
+    p.add_argument("--out", default=None, help="output path (default: the bundled word list)")
+    p.set_defaults(func=_cmd_vtl_lexicon)
+
+
+def _cmd_vtl_lexicon(args) -> int:
+    out = args.out or str(LEXICON_PATH)
+    n = extract_articubench_lexicon(args.pkl, out)
+    print(f"wrote {n} words to {out}")
+    return 0

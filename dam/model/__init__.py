@@ -1,0 +1,29 @@
+"""The Dominated Animeme Model (Chen et al. 2012), one file per step of the paper.
+
+Training (Section V):
+
+- :mod:`~dam.model.dominance`: the dominance function, Eq. (1).
+- :mod:`~dam.model.animeme`: the polynomial animeme (degree M), in a shifted Legendre basis.
+- :mod:`~dam.model.modes`: modes per phone by affinity propagation.
+- :mod:`~dam.model.estep`: the least-squares E-step, Eqs. (3)-(7).
+- :mod:`~dam.model.mstep`: the Gauss-Newton M-step on sigma.
+- :mod:`~dam.model.em`: the EM alternation of the two.
+
+Synthesis (Section VI):
+
+- :mod:`~dam.model.astar`: one mode per segment by A* over the animeme graph.
+- :mod:`~dam.model.synthesis`: concatenation by Eq. (2).
+
+The estimator :class:`DAM` (and the preset :class:`DAMM0`) lives in
+:mod:`~dam.model.estimator`; :func:`inspect_report` in :mod:`~dam.model.inspection`.
+"""
+from __future__ import annotations
+
+from dam._lazy import lazy_exports
+
+_EXPORTS = {"DAM": ".estimator", "DAMM0": ".estimator", "inspect_report": ".inspection"}
+_SUBMODULES = ("dominance", "animeme", "modes", "estep", "mstep", "em", "astar", "synthesis", "estimator",
+               "inspection")
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBMODULES)
+
+__all__ = ["DAM", "DAMM0", "inspect_report"]

@@ -38,16 +38,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Synthesizer
+from dam import Interval, StateArray, Synthesizer, TupleOf
 from dam import Alignment, Corpus
+from dam import progress
 
 from .reference import PhoneMean
 
 __all__ = ["CohenMassaro", "dominance", "cohen_massaro_trajectory", "residuals_and_jacobian",
            "normal_equations", "levenberg_marquardt"]
 
-# Synthesis computes (frames x segments) weights this many values at a time.
-_BLOCK_VALUES = 2 ** 22
+# Fit and synthesis see an utterance in blocks of this many frames, each with the
+# segments that overlap it and NEIGHBOURS more on either side: a (frames x segments)
+# array per block, so memory and time grow linearly with the utterance's length
+# instead of quadratically. A segment further away than that from every frame of
+# a block is left out there: its weight, normalised against the 30 nearer ones,
+# is negligible (and a phrase-length utterance is one block with all its segments).
+BLOCK_FRAMES = 1000
+NEIGHBOURS = 30
 # Parameter blocks of one channel, each of length n_phones, in this order.
 BLOCKS = ("target", "log_alpha", "log_theta_left", "log_theta_right", "log_c")
 
@@ -82,24 +89,39 @@ class _Design:
     __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone", "present", "onehot")
 
     def __init__(self, alignment: Alignment, phone_rows: np.ndarray, frame_rate: float, n_frames: int,
-                 stride: int = 1, start: int = 0):
+                 stride: int = 1, start: int = 0, jacobian: bool = True):
         # Neighbouring segments of one phone (a pause cut in two) act as one segment.
         phone_rows = np.asarray(phone_rows)
         first = np.r_[True, phone_rows[1:] != phone_rows[:-1]]
         last = np.r_[first[1:], True]
-        centres = 0.5 * (alignment.starts[first] + alignment.ends[last])
+        seg_start, seg_end = alignment.starts[first], alignment.ends[last]
         phone_rows = phone_rows[first]
         t = np.arange(start, n_frames, stride) / frame_rate
+        # the segments overlapping these frames, and NEIGHBOURS more on either side
+        lo = max(int(np.searchsorted(seg_end, t[0] if t.size else 0.0, side="left")) - NEIGHBOURS, 0)
+        hi = int(np.searchsorted(seg_start, t[-1] if t.size else 0.0, side="right")) + NEIGHBOURS
+        centres = 0.5 * (seg_start[lo:hi] + seg_end[lo:hi])
         self.tau = centres[None, :] - t[:, None]
         self.abs_tau = np.abs(self.tau)
-        with np.errstate(divide="ignore"):
-            self.log_abs_tau = np.where(self.abs_tau > 0, np.log(np.maximum(self.abs_tau, 1e-300)), 0.0)
         self.before = self.tau > 0
-        self.phone = np.asarray(phone_rows, dtype=np.intp)
-        # the phones present, and which of them each segment is (for the Jacobian)
-        self.present, local = np.unique(self.phone, return_inverse=True)
-        self.onehot = np.zeros((len(self.phone), len(self.present)))
-        self.onehot[np.arange(len(self.phone)), local] = 1.0
+        self.phone = np.asarray(phone_rows[lo:hi], dtype=np.intp)
+        self.log_abs_tau = self.present = self.onehot = None
+        if jacobian:
+            with np.errstate(divide="ignore"):
+                self.log_abs_tau = np.where(self.abs_tau > 0, np.log(np.maximum(self.abs_tau, 1e-300)), 0.0)
+            # the phones present, and which of them each segment is (for the Jacobian)
+            self.present, local = np.unique(self.phone, return_inverse=True)
+            self.onehot = np.zeros((len(self.phone), len(self.present)))
+            self.onehot[np.arange(len(self.phone)), local] = 1.0
+
+    @classmethod
+    def blocks(cls, alignment: Alignment, phone_rows, frame_rate: float, n_frames: int, stride: int = 1,
+               jacobian: bool = True) -> list:
+        """The designs of an utterance's frames ``0, stride, ...`` in blocks of about
+        :data:`BLOCK_FRAMES` frames (see there); each block's frames are one slice of the output."""
+        step = max(BLOCK_FRAMES // stride, 1) * stride
+        return [cls(alignment, phone_rows, frame_rate, min(b + step, n_frames), stride, b, jacobian)
+                for b in range(0, n_frames, step)]
 
 
 def _weights(design: _Design, log_alpha, theta_l, theta_r, c):
@@ -287,7 +309,21 @@ class CohenMassaro(Synthesizer):
     """
 
     name = "cohen-massaro"
-    _tags = {"deterministic": True}
+    _tags = {"deterministic": True, "numpy_runtime": True}
+    _parameter_constraints = {
+        "ridge": [Interval(float, 0, None, closed="left")],
+        "max_nfev": [Interval(int, 1, None, closed="left")],
+        "tol": [Interval(float, 0, None, closed="left")],
+        "c_bounds": [TupleOf(Interval(float, 0, None, closed="neither"), min_len=2, max_len=2, increasing=True)],
+        "fit_rate": [Interval(float, 0, None, closed="neither"), None],
+    }
+    _state_schema = {  # checked at save and load (dam.modelfile.check_state)
+        "cost_": StateArray("float", ("n_channels",), low=0),
+        "n_fev_": StateArray("int", ("n_channels",), low=0),
+        "target_": StateArray("float", ("n_phones", "n_channels")),
+        **dict.fromkeys(["alpha_", "theta_left_", "theta_right_", "c_"],
+                        StateArray("float", ("n_phones", "n_channels"), low=0)),
+    }
 
     def __init__(self, *, ridge: float = 1e-4, max_nfev: int = 200, tol: float = 1e-4,
                  c_bounds: tuple = (0.25, 4.0), fit_rate: float | None = 100.0, unknown_phone: str = "error"):
@@ -302,30 +338,20 @@ class CohenMassaro(Synthesizer):
     def get_test_params(cls) -> list[dict]:
         return [{"max_nfev": 8}, {"max_nfev": 5, "ridge": 1e-3, "unknown_phone": "fallback"}]
 
-    def _check_params(self) -> None:
-        if self.unknown_phone not in ("error", "fallback"):
-            raise ValueError(f"CohenMassaro: parameter 'unknown_phone' is {self.unknown_phone!r}; "
-                             "use 'error' or 'fallback'")
-        if not (self.ridge >= 0):
-            raise ValueError(f"CohenMassaro: parameter 'ridge' is {self.ridge!r}; must be >= 0")
-        lo, hi = self.c_bounds
-        if not (0 < lo < hi):
-            raise ValueError(f"CohenMassaro: parameter 'c_bounds' is {self.c_bounds!r}; need 0 < low < high")
-        if self.fit_rate is not None and not (self.fit_rate > 0):
-            raise ValueError(f"CohenMassaro: parameter 'fit_rate' is {self.fit_rate!r}; must be positive or None")
-
     def _stride(self, frame_rate: float) -> int:
         return 1 if self.fit_rate is None else max(1, int(round(frame_rate / self.fit_rate)))
 
     def _designs(self, corpus: Corpus) -> list:
+        """One list of block designs per utterance (see :data:`BLOCK_FRAMES`)."""
         index = {p: i for i, p in enumerate(self.phone_counts_)}
         stride = self._stride(corpus.frame_rate)
-        return [_Design(u.alignment, np.array([index[lab] for lab in u.alignment.labels]), u.frame_rate,
-                        u.n_frames, stride) for u in corpus]
+        return [_Design.blocks(u.alignment, np.array([index[lab] for lab in u.alignment.labels]), u.frame_rate,
+                               u.n_frames, stride) for u in corpus]
 
     def _fit(self, corpus: Corpus) -> None:
         P, C = len(self.phone_counts_), corpus.n_channels
-        designs = self._designs(corpus)
+        per_utt = self._designs(corpus)
+        designs = [d for ds in per_utt for d in ds]
         stride = self._stride(corpus.frame_rate)
         n_total = sum(len(d.tau) for d in designs)
         dur = np.mean(np.concatenate([u.alignment.durations for u in corpus]))
@@ -340,10 +366,11 @@ class CohenMassaro(Synthesizer):
         self.cost_ = np.zeros(C)
         self.n_fev_ = np.zeros(C, dtype=int)
         lam = np.sqrt(self.ridge * n_total)
-        for ch in range(C):
+        for ch in progress.track(range(C), "Cohen-Massaro", unit="channel", labels=list(corpus.channels)):
             ys = [u.trajectory[::stride, ch] for u in corpus]
             mu, sd = np.mean(np.concatenate(ys)), np.std(np.concatenate(ys)) + 1e-12
-            ys = [(y - mu) / sd for y in ys]  # standardised: one ridge weight fits every channel
+            # standardised (one ridge weight fits every channel), cut as the designs' blocks
+            ys = [part for y, ds in zip(ys, per_utt) for part in _split(np.asarray((y - mu) / sd), ds)]
             x0 = np.concatenate([(means[:, ch] - mu) / sd, x0_dom])
             x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
 
@@ -368,16 +395,21 @@ class CohenMassaro(Synthesizer):
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         index = {p: i for i, p in enumerate(self.phone_counts_)}
-        rows = np.array([index[p] for p in self._known_labels(alignment, self.unknown_phone)])
-        out = np.empty((n_frames, len(self.channels_)))
-        log_alpha = np.log(self.alpha_)
-        # Every segment reaches every frame: blocks of frames bound the memory of a long recording.
-        block = max(1, _BLOCK_VALUES // max(len(alignment), 1))
-        for start in range(0, n_frames, block):
-            d = _Design(alignment, rows, self.frame_rate_, min(start + block, n_frames), start=start)
-            for ch in range(len(self.channels_)):
-                out[start:start + block, ch] = cohen_massaro_trajectory(
-                    d, self.target_[:, ch], log_alpha[:, ch], self.theta_left_[:, ch], self.theta_right_[:, ch],
-                    self.c_[:, ch])
-        return out
+        rows = np.fromiter((index[p] for p in self._known_labels(alignment, self.unknown_phone)), dtype=np.intp)
+        parts = []
+        for d in _Design.blocks(alignment, rows, self.frame_rate_, n_frames, jacobian=False):
+            # all channels at once: (frames, segments, channels)
+            p = d.phone
+            theta = np.where(d.before[:, :, None], self.theta_left_[p], self.theta_right_[p])
+            log_d = np.log(self.alpha_[p]) - theta * d.abs_tau[:, :, None] ** self.c_[p]
+            log_d -= log_d.max(axis=1, keepdims=True)
+            w = np.exp(log_d)
+            parts.append(np.einsum("fsc,sc->fc", w, self.target_[p]) / w.sum(axis=1))
+        return np.concatenate(parts)
+
+
+def _split(y: np.ndarray, designs: list) -> list:
+    """``y`` (one utterance's fitted frames) cut into the frames of each block design."""
+    cuts = np.cumsum([len(d.tau) for d in designs])[:-1]
+    return np.split(y, cuts)
 

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Synthesizer
+from dam import Interval, Options, StateNames, Synthesizer
 from dam import Alignment, Corpus
-from dam.corpus import (fit_transition_clusters, overlap_average, phone_vocabulary, window_features,
+from dam.corpus import (fit_transition_clusters, overlap_average, phone_vocabulary, window_dilation, window_features,
                           window_targets)
 
 __all__ = ["DecisionTree", "tree_to_arrays", "predict_tree_arrays"]
@@ -116,7 +116,22 @@ class DecisionTree(Synthesizer):
     """
 
     name = "dtree"
-    _tags = {"deterministic": True}
+    _tags = {"deterministic": True, "numpy_runtime": True}
+    _parameter_constraints = {
+        **dict.fromkeys(["kx", "ky", "min_samples_leaf"], [Interval(int, 1, None, closed="left")]),
+        "example_stride": [Interval(int, 1, None, closed="left"), None],
+        "max_depth": [Interval(int, 1, None, closed="left"), None],
+        "features": [Options({"raw", "linguistic"})],
+        "transitions": [Options({"data", "phonetic"})],
+        "window_rate": [Interval(float, 0, None, closed="neither"), None],
+    }
+    _state_schema = {  # checked at save and load (dam.modelfile.check_state)
+        "vocabulary_": StateNames(),
+        "dilation_": Interval(int, 1, None),
+        "transition_clusters_": None,
+        "tree_": None,
+        "n_leaves_": Interval(int, 1, None),
+    }
 
     def __init__(self, *, kx: int = 11, ky: int = 5, features: str = "raw", transitions: str = "data",
                  window_rate: float | None = 30.0, example_stride: int | None = None, min_samples_leaf: int = 10,
@@ -137,25 +152,6 @@ class DecisionTree(Synthesizer):
         return [{"max_depth": 12}, {"features": "linguistic", "kx": 7, "ky": 3, "max_depth": 8,
                                     "unknown_phone": "fallback"}]
 
-    def _check_params(self) -> None:
-        for nm in ("kx", "ky", "min_samples_leaf", "example_stride"):
-            v = getattr(self, nm)
-            if v is None and nm == "example_stride":
-                continue
-            if int(v) != v or v < 1:
-                raise ValueError(f"DecisionTree: parameter {nm!r} is {v!r}; must be a positive integer")
-        if self.features not in ("raw", "linguistic"):
-            raise ValueError(f"DecisionTree: parameter 'features' is {self.features!r}; use 'raw' or 'linguistic'")
-        if self.transitions not in ("data", "phonetic"):
-            raise ValueError(f"DecisionTree: parameter 'transitions' is {self.transitions!r}; "
-                             "use 'data' or 'phonetic'")
-        if self.window_rate is not None and not (self.window_rate > 0):
-            raise ValueError(f"DecisionTree: parameter 'window_rate' is {self.window_rate!r}; "
-                             "must be positive or None")
-        if self.unknown_phone not in ("error", "fallback"):
-            raise ValueError(f"DecisionTree: parameter 'unknown_phone' is {self.unknown_phone!r}; "
-                             "use 'error' or 'fallback'")
-
     def _features(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         return window_features(alignment, self.frame_rate_, n_frames, self.vocabulary_, kx=self.kx,
                                features=self.features, transition_clusters=self.transition_clusters_,
@@ -164,7 +160,7 @@ class DecisionTree(Synthesizer):
     def _fit(self, corpus: Corpus) -> None:
         from sklearn.tree import DecisionTreeRegressor
         self.vocabulary_ = phone_vocabulary(corpus, silence=corpus.alignments[0].silence)
-        self.dilation_ = 1 if self.window_rate is None else max(1, int(round(corpus.frame_rate / self.window_rate)))
+        self.dilation_ = window_dilation(corpus.frame_rate, self.window_rate)
         self.transition_clusters_ = None
         if self.features == "linguistic" and self.transitions == "data":
             self.transition_clusters_ = fit_transition_clusters(corpus, self.vocabulary_,

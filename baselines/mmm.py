@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from dam import Synthesizer
+from dam import Interval, StateArray, Synthesizer, TupleOf
 from dam import Alignment, Corpus
 
 __all__ = ["MMM", "difference_gram_banded", "banded_cholesky_solve", "solve_banded_spd", "mmm_system",
@@ -235,7 +235,24 @@ class MMM(Synthesizer):
     """
 
     name = "mmm"
-    _tags = {"deterministic": True}
+    _tags = {"deterministic": True, "numpy_runtime": True}
+    _parameter_constraints = {
+        "smoothness": [TupleOf(Interval(float, 0, None, closed="neither")),
+                       Interval(float, 0, None, closed="neither")],
+        "order": [Interval(int, 1, 2, closed="both")],
+        "duration_weighting": ["boolean"],
+        "max_iter": [Interval(int, 0, None, closed="left")],
+        "validation_fraction": [Interval(float, 0, 1, closed="neither")],
+        "var_floor": [Interval(float, 0, None, closed="neither")],
+    }
+    _state_schema = {  # checked at save and load (dam.modelfile.check_state)
+        "validation_rmse_": None,
+        "smoothness_": Interval(float, 0, None, closed="neither"),
+        "mean_": StateArray("float", ("n_phones", "n_channels")),
+        "var_": StateArray("float", ("n_phones", "n_channels"), low=0),
+        "loss_": StateArray("float", ("n_channels",), low=0),
+        "channel_scale_": StateArray("float", ("n_channels",), low=0),
+    }
 
     def __init__(self, *, smoothness: tuple = (1.0, 10.0, 100.0, 1000.0), order: int = 2,
                  duration_weighting: bool = True, max_iter: int = 100, validation_fraction: float = 0.2,
@@ -253,18 +270,6 @@ class MMM(Synthesizer):
     def get_test_params(cls) -> list[dict]:
         return [{"smoothness": (1.0, 100.0), "max_iter": 20},
                 {"smoothness": (10.0,), "order": 1, "max_iter": 10, "unknown_phone": "fallback"}]
-
-    def _check_params(self) -> None:
-        cands = np.atleast_1d(np.asarray(self.smoothness, dtype=float))
-        if cands.size == 0 or not np.all(np.isfinite(cands)) or np.any(cands <= 0):
-            raise ValueError(f"MMM: parameter 'smoothness' is {self.smoothness!r}; give positive values")
-        if self.order not in (1, 2):
-            raise ValueError(f"MMM: parameter 'order' is {self.order!r}; use 1 or 2")
-        if not (0 < self.validation_fraction < 1):
-            raise ValueError(f"MMM: parameter 'validation_fraction' is {self.validation_fraction!r}; "
-                             "must be in (0, 1)")
-        if self.unknown_phone not in ("error", "fallback"):
-            raise ValueError(f"MMM: parameter 'unknown_phone' is {self.unknown_phone!r}; use 'error' or 'fallback'")
 
     # -- fitting -----------------------------------------------------------
     def _prepare(self, corpus: Corpus, index: dict, loc, scale) -> list:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Synthesizer
+from dam import StateArray, Synthesizer
 from dam import Alignment, Corpus
 
 __all__ = ["PhoneMean", "TargetInterpolation"]
@@ -21,13 +21,11 @@ __all__ = ["PhoneMean", "TargetInterpolation"]
 class _PerPhoneTable(Synthesizer):
     """Shared machinery: one vector per phone, looked up by label."""
 
+    _tags = {"numpy_runtime": True}  # unknown_phone's constraint: declared by Synthesizer
+    _state_schema = {"table_": StateArray("float", ("n_phones", "n_channels"))}  # checked at save and load
+
     def __init__(self, *, unknown_phone: str = "error"):
         self.unknown_phone = unknown_phone
-
-    def _check_params(self) -> None:
-        if self.unknown_phone not in ("error", "fallback"):
-            raise ValueError(f"{type(self).__name__}: parameter 'unknown_phone' is {self.unknown_phone!r}; "
-                             "use 'error' or 'fallback'")
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
@@ -60,15 +58,17 @@ class PhoneMean(_PerPhoneTable):
     def _fit(self, corpus: Corpus) -> None:
         index = {p: i for i, p in enumerate(self.phone_counts_)}
         sums = np.zeros((len(index), corpus.n_channels))
-        counts = np.zeros(len(index))
+        counts = np.zeros((len(index), corpus.n_channels))
         for u in corpus:
             seg = u.alignment.segment_index(u.frame_rate, u.n_frames)
             rows = np.array([index[lab] for lab in u.alignment.labels])[seg]
-            np.add.at(sums, rows, u.trajectory)
-            np.add.at(counts, rows, 1.0)
-        # A phone shorter than a frame owns no frame: give it the corpus mean.
-        overall = np.concatenate(corpus.trajectories).mean(axis=0)
-        self.table_ = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], overall)
+            # missing values (Utterance.mask) do not count: the mean is over observed values only
+            w = np.ones(u.trajectory.shape) if u.mask is None else u.mask.astype(float)
+            np.add.at(sums, rows, u.trajectory * w)
+            np.add.at(counts, rows, w)
+        # A phone shorter than a frame (or never observed in a channel) gets the corpus mean.
+        overall = sums.sum(axis=0) / np.maximum(counts.sum(axis=0), 1)
+        self.table_ = np.where(counts > 0, sums / np.maximum(counts, 1), overall)
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         rows = self._rows(alignment)

@@ -43,6 +43,7 @@ VARIANTS = [
     ("dam hold single-mode", "dam", {"extrapolate": "hold", "modes": "single"}),
     ("dam preference=median", "dam", {"mode_preference": "median"}),
     ("dam plain sum", "dam", {"normalize": False}),
+    ("dam-paper", "dam-paper", {}),
     ("dam-m0 plain sum", "dam-m0", {"normalize": False}),
     ("dam-m0 single-mode", "dam-m0", {"modes": "single"}),
 ]

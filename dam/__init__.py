@@ -25,9 +25,10 @@ from __future__ import annotations
 from dam import _compat
 from dam._lazy import lazy_exports
 from dam._version import __version__
-from dam.base import ConvergenceWarning, NotFittedError, Synthesizer, UnknownPhoneError, clone
+from dam.base import (ConvergenceWarning, Interval, InvalidParameterError, NotFittedError, Options, Synthesizer,
+                      TupleOf, UnknownPhoneError, clone)
 from dam.corpus.data import SILENCE, Alignment, Corpus, DataError, Utterance
-from dam.modelfile import ModelFileError, load
+from dam.modelfile import ModelFileError, StateArray, StateCounts, StateNames, load
 from dam.registry import make, register
 
 _compat.install()
@@ -36,11 +37,13 @@ _EXPORTS = {
     **dict.fromkeys(["load_corpus", "save_corpus", "read_alignment"], "dam.corpus.io"),
     "evaluate": "dam.evaluation.metrics",
     "compare": "dam.evaluation.compare",
+    **dict.fromkeys(["align", "text_to_phones", "animate"], "dam.speech"),
 }
 _SUBMODULES = ("corpus", "model", "evaluation", "crossmap", "datasets", "testing", "registry", "base",
-               "modelfile")
+               "modelfile", "speech", "progress", "plotting", "export")
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
 __all__ = ["Alignment", "Utterance", "Corpus", "Synthesizer", "DataError", "NotFittedError",
-           "ModelFileError", "UnknownPhoneError", "ConvergenceWarning", "SILENCE", "clone", "load", "make",
+           "ModelFileError", "UnknownPhoneError", "ConvergenceWarning", "InvalidParameterError",
+           "Interval", "Options", "TupleOf", "StateArray", "StateNames", "StateCounts", "SILENCE", "clone", "load", "make",
            "register", "__version__", *_EXPORTS]

@@ -15,14 +15,16 @@ from __future__ import annotations
 import copy
 import inspect
 import os
+from dataclasses import dataclass
 
 import numpy as np
 
-from dam.corpus.data import Alignment, Corpus, DataError
-from dam.modelfile import ModelFileError, load, write_model_file
+from dam._params import Interval, InvalidParameterError, Options, TupleOf, validate_params
+from dam.corpus.data import MAX_FRAME_RATE, Alignment, Corpus, DataError
+from dam.modelfile import ModelFileError, StateCounts, StateNames, load, write_model_file
 
 __all__ = ["Synthesizer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
-           "clone", "load"]
+           "InvalidParameterError", "Interval", "Options", "TupleOf", "Tag", "TAGS", "clone", "load", "predict_inputs"]
 
 
 class NotFittedError(RuntimeError, AttributeError):
@@ -38,6 +40,55 @@ class UnknownPhoneError(DataError):
     """A phone the model never saw in training and cannot fall back from."""
 
 
+@dataclass(frozen=True)
+class Tag:
+    """One entry of the tag register :data:`TAGS`.
+
+    Attributes
+    ----------
+    name : str
+    type : type
+        ``bool`` or ``tuple`` (a tuple of str).
+    default
+        The value of a class that does not set it.
+    meaning : str
+        What it says, and which check of :mod:`dam.testing` relies on it.
+    values : tuple of str or None
+        For tuple tags: the strings allowed in it (None: any).
+    """
+
+    name: str
+    type: type
+    default: object
+    meaning: str
+    values: tuple | None = None
+
+    def check(self, owner: str, value) -> None:
+        """Raise TypeError naming ``owner``, the tag and the value if ``value`` is not a valid value."""
+        ok = isinstance(value, self.type) and not (self.type is bool and not isinstance(value, bool))
+        if ok and self.type is tuple:
+            ok = all(isinstance(v, str) and (self.values is None or v in self.values) for v in value)
+        if not ok:
+            allowed = f"a tuple of {', '.join(map(repr, self.values))}" if self.values else \
+                ("a tuple of str" if self.type is tuple else "True or False")
+            raise TypeError(f"{owner}: tag {self.name!r} is {value!r}; it must be {allowed}")
+
+
+#: Every tag a synthesizer may set in its ``_tags`` (unknown names are an error).
+TAGS: dict[str, Tag] = {t.name: t for t in (
+    Tag("requires", tuple, (), "optional extras of dam the model needs to fit and predict, e.g. ('jax',) "
+        "(`pip install \"dam[jax]\"`); a model whose extra is missing is skipped by `dam compare`"),
+    Tag("reads", tuple, ("phones",), "what predict reads: phone timings, and audio", values=("phones", "audio")),
+    Tag("deterministic", bool, True, "the same data and parameters (random_state included) give the same model: "
+        "check_refit_idempotent asks it; otherwise check_same_seed_same_model"),
+    Tag("slow", bool, False, "fitting takes seconds even with get_test_params (the neural models)"),
+    Tag("reference", bool, False, "a reference the others are measured against: check_beats_phone_mean "
+        "does not apply"),
+    Tag("numpy_runtime", bool, False, "a saved model loads and predicts with numpy alone (no scipy, "
+        "scikit-learn or jax): check_numpy_runtime asks it"),
+)}
+
+
 class Synthesizer:
     """Base class for all synthesizers.
 
@@ -46,17 +97,65 @@ class Synthesizer:
     name : str
         The registry name (``dam models`` lists them).
     _tags : dict
-        ``requires`` (tuple of optional extras, e.g. ``("jax",)``), ``reads``
-        (``("phones",)`` or ``("phones", "audio")``), ``deterministic``
-        (bool: same data and params give the same model), ``slow`` (bool:
-        fitting takes long enough that the conformance suite uses
-        ``get_test_params``).
+        Tags of the register :data:`TAGS` (``requires``, ``reads``,
+        ``deterministic``, ``slow``, ``reference``, ``numpy_runtime``);
+        :meth:`get_tags` merges them over the class hierarchy and checks them.
+    _parameter_constraints : dict
+        ``{parameter: [constraint, ...]}`` in the vocabulary of
+        :mod:`dam._params` (:class:`Interval`, :class:`Options`,
+        :class:`TupleOf`, ``"boolean"``, ``"random_state"``, ``"callable"``,
+        None, a class); a value must satisfy one of its list. Merged over the
+        class hierarchy (this base declares ``unknown_phone``, ``random_state``
+        and ``verbose`` for every subclass that has them) and checked at the
+        start of :meth:`fit`.
+    _preset : dict
+        A preset of the parent class: ``class DAMM0(DAM): _preset = {"degree": 0}``
+        changes those defaults and nothing else (no ``__init__`` to repeat);
+        ``get_params``, ``clone``, ``repr`` and model files see the new defaults.
+
+    Examples
+    --------
+    A synthesizer of your own: store keyword-only hyperparameters, learn ``*_`` attributes.
+
+    >>> import numpy as np, dam
+    >>> class Constant(dam.Synthesizer):
+    ...     name = "constant-example"
+    ...     def __init__(self, *, offset=0.0):
+    ...         self.offset = offset
+    ...     def _fit(self, corpus):
+    ...         self.mean_ = np.mean(np.vstack([u.trajectory for u in corpus]), axis=0) + self.offset
+    ...     def _predict(self, alignment, n_frames):
+    ...         return np.tile(self.mean_, (n_frames, 1))
+    >>> train = dam.datasets.load("tiny")
+    >>> model = Constant(offset=1.0).fit(train)
+    >>> model.predict(train[0].alignment).shape == train[0].trajectory.shape
+    True
+    >>> model.get_params()
+    {'offset': 1.0}
     """
 
     name: str = ""
     _tags: dict = {}
-    _default_tags = {"requires": (), "reads": ("phones",), "deterministic": True, "slow": False,
-                     "reference": False}
+    _parameter_constraints: dict = {
+        "unknown_phone": [Options({"error", "fallback"})],
+        "random_state": ["random_state"],
+        "verbose": [Interval(int, 0, None, closed="left"), "boolean"],
+    }
+    _preset: dict = {}
+    # What a model file must hold (dam.modelfile.check_state, at save and at load): the
+    # state every synthesizer has. A subclass declares its own learned attributes the same
+    # way; then its schema is complete and a file holding anything else is refused.
+    _state_schema: dict = {
+        "frame_rate_": Interval(float, 0, MAX_FRAME_RATE, closed="right"),
+        "channels_": StateNames("n_channels"),
+        "phone_counts_": StateCounts("n_phones"),
+    }
+    _state_schema_common = True
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("_preset"):
+            _apply_preset(cls, dict(cls.__dict__["_preset"]))
 
     # -- hyperparameters (scikit-learn conventions) ------------------------
     @classmethod
@@ -90,10 +189,50 @@ class Synthesizer:
 
     @classmethod
     def get_tags(cls) -> dict:
-        tags = dict(Synthesizer._default_tags)
+        """Every tag of :data:`TAGS`: the register's default, overridden down the class hierarchy.
+
+        Raises
+        ------
+        TypeError
+            A class sets a tag the register does not know, or a value of the wrong type.
+        """
+        tags = {name: tag.default for name, tag in TAGS.items()}
         for klass in reversed(cls.__mro__):
-            tags.update(getattr(klass, "_tags", {}) or {})
+            for k, v in (klass.__dict__.get("_tags") or {}).items():
+                if k not in TAGS:
+                    raise TypeError(f"{klass.__name__}: unknown tag {k!r}; the tags are {', '.join(TAGS)} "
+                                    "(dam.base.TAGS)")
+                TAGS[k].check(klass.__name__, v)
+                tags[k] = v
         return tags
+
+    @classmethod
+    def get_parameter_constraints(cls) -> dict:
+        """``{parameter: [constraint, ...]}`` of every parameter that declares one (merged down the
+        class hierarchy, subclasses overriding)."""
+        merged: dict = {}
+        for klass in reversed(cls.__mro__):
+            merged.update(klass.__dict__.get("_parameter_constraints") or {})
+        names = set(cls._param_names())
+        return {k: v for k, v in merged.items() if k in names}
+
+    def _validate_params(self) -> None:
+        """Check the hyperparameters against their declared constraints, then the relations
+        between them (:meth:`_check_param_relations`).
+
+        Raises
+        ------
+        InvalidParameterError
+            Naming the class, the parameter, the value and what is allowed.
+        """
+        validate_params(type(self).__name__, self.get_parameter_constraints(), self.get_params())
+        self._check_param_relations()
+        if hasattr(self, "_check_params"):  # dam 0.1's hand-written hook, still honoured; declare constraints instead
+            self._check_params()
+
+    def _check_param_relations(self) -> None:
+        """Check rules that tie parameters together (override; each parameter alone is
+        declared in ``_parameter_constraints``). Raise :class:`InvalidParameterError`."""
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
@@ -102,11 +241,22 @@ class Synthesizer:
 
     # -- fitting -----------------------------------------------------------
     def fit(self, corpus: Corpus) -> "Synthesizer":
-        """Learn from ``corpus`` and return ``self``."""
+        """Learn from ``corpus`` and return ``self``.
+
+        Missing data: where ``Utterance.mask`` marks a value as not observed,
+        the trajectory a model sees holds the linear interpolation over time
+        of the channel's observed values (never the value the source had
+        there, never NaN), so every model fits without special cases and a
+        masked value cannot influence any fit. For a model with a per-frame
+        loss, fitting the interpolated values is not the same as skipping
+        them; models that can skip them exactly do (``phone-mean`` averages
+        observed values only; the DAM weights its E- and M-step least squares
+        by the mask, while its mode clustering sees the interpolated values).
+        """
         if not isinstance(corpus, Corpus):
             raise TypeError(f"{type(self).__name__}.fit expects a dam.Corpus, got {type(corpus).__name__}"
                             "; build one with dam.Corpus([...]) or dam.load_corpus(path)")
-        self._check_params()
+        self._validate_params()
         self._forget_learned()
         self.frame_rate_ = corpus.frame_rate
         self.channels_ = list(corpus.channels)
@@ -127,9 +277,6 @@ class Synthesizer:
         for k in [k for k in vars(self) if k.endswith("_") and not k.startswith("_")]:
             delattr(self, k)
 
-    def _check_params(self) -> None:
-        """Validate hyperparameters before fitting (override)."""
-
     def _fit(self, corpus: Corpus) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
@@ -146,24 +293,47 @@ class Synthesizer:
 
         Parameters
         ----------
-        alignment : Alignment or list of Alignment
+        alignment : Alignment, Utterance, or a list of them
+            A model that reads audio (:meth:`reads`) takes an Utterance with
+            audio or a :class:`dam.corpus.AudioClip` instead.
 
         Returns
         -------
         ndarray of shape (n_frames, n_channels), or a list of them
-            ``n_frames = alignment.n_frames(frame_rate_)``.
+            ``n_frames = alignment.n_frames(frame_rate_)`` (of the
+            utterance's alignment; of the clip's duration).
         """
         self._check_fitted()
         if isinstance(alignment, (list, tuple)):
             return [self._predict_one(a) for a in alignment]
         return self._predict_one(alignment)
 
+    def reads(self) -> tuple:
+        """What :meth:`predict` reads: ``("phones",)`` (alignments) or ``("audio",)``.
+
+        The class tag ``reads``; a model whose input depends on a parameter
+        (the neural models' ``encoder``) overrides this. A model that reads
+        audio predicts from an :class:`~dam.Utterance` with audio or a
+        :class:`dam.corpus.AudioClip`; every model accepts an Utterance.
+        """
+        return tuple(type(self).get_tags()["reads"])
+
     def _predict_one(self, alignment) -> np.ndarray:
-        if not isinstance(alignment, Alignment):
-            raise TypeError(f"{type(self).__name__}.predict expects a dam.Alignment (or a list of them), "
+        from dam.corpus.data import Utterance
+        from dam.corpus.formats.audio import AudioClip
+        audio = "audio" in self.reads()
+        if isinstance(alignment, Utterance) and not audio:
+            alignment = alignment.alignment  # a phone-driven model reads the utterance's alignment
+        if isinstance(alignment, Alignment):
+            n = alignment.n_frames(self.frame_rate_)
+            out = np.asarray(self._predict(alignment, n), dtype=float)
+        elif audio and isinstance(alignment, (Utterance, AudioClip)):
+            n = (alignment.alignment if isinstance(alignment, Utterance) else alignment).n_frames(self.frame_rate_)
+            out = np.asarray(self._predict_audio(alignment, n), dtype=float)
+        else:
+            raise TypeError(f"{type(self).__name__}.predict expects a dam.Alignment, a dam.Utterance"
+                            f"{' or a dam.corpus.AudioClip' if audio else ''} (or a list of them), "
                             f"got {type(alignment).__name__}")
-        n = alignment.n_frames(self.frame_rate_)
-        out = np.asarray(self._predict(alignment, n), dtype=float)
         if out.shape != (n, len(self.channels_)):
             raise RuntimeError(f"{type(self).__name__} produced shape {out.shape}, expected {(n, len(self.channels_))}")
         if not np.all(np.isfinite(out)):
@@ -171,6 +341,10 @@ class Synthesizer:
         return out
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def _predict_audio(self, source, n_frames: int) -> np.ndarray:  # pragma: no cover - audio models only
+        """Prediction from an Utterance with audio or an AudioClip (models whose :meth:`reads` has "audio")."""
         raise NotImplementedError
 
     @property
@@ -235,9 +409,48 @@ class Synthesizer:
         return model
 
 
+def predict_inputs(model, corpus: Corpus) -> list:
+    """What ``model.predict`` reads for every utterance of ``corpus``: the
+    utterances themselves for a model that reads audio, else their alignments."""
+    reads = getattr(model, "reads", None)
+    return list(corpus) if reads is not None and "audio" in reads() else corpus.alignments
+
+
 def clone(estimator: Synthesizer) -> Synthesizer:
-    """An unfitted copy of ``estimator`` with the same hyperparameters (deep-copied)."""
+    """An unfitted copy of ``estimator`` with the same hyperparameters (deep-copied).
+
+    Examples
+    --------
+    >>> import dam
+    >>> model = dam.make("dam", degree=2)
+    >>> copy = dam.clone(model)
+    >>> copy is model, copy.get_params() == model.get_params()
+    (False, True)
+    """
     return type(estimator)(**copy.deepcopy(estimator.get_params()))
+
+
+def _apply_preset(cls: type, preset: dict) -> None:
+    """Give ``cls`` its parent's ``__init__`` with the defaults of ``preset`` (see ``Synthesizer._preset``)."""
+    if "__init__" in cls.__dict__:
+        raise TypeError(f"{cls.__name__}: a preset declares _preset and no __init__ of its own")
+    parent_init = cls.__init__
+    sig = inspect.signature(parent_init)
+    unknown = sorted(set(preset) - set(sig.parameters) - {"self"})
+    if unknown:
+        raise TypeError(f"{cls.__name__}: _preset names {unknown}, which are not parameters of "
+                        f"{cls.__mro__[1].__name__}")
+
+    def __init__(self, **params):
+        parent_init(self, **{**preset, **params})
+
+    __init__.__signature__ = sig.replace(parameters=[p.replace(default=preset[p.name]) if p.name in preset else p
+                                                     for p in sig.parameters.values()])
+    __init__.__qualname__ = f"{cls.__qualname__}.__init__"
+    __init__.__module__ = cls.__module__
+    __init__.__doc__ = (f"Parameters as :class:`{cls.__mro__[1].__name__}`, with the defaults "
+                        + ", ".join(f"{k}={v!r}" for k, v in preset.items()) + ".")
+    cls.__init__ = __init__
 
 
 def _same(a, b) -> bool:

@@ -12,7 +12,7 @@ and model)::
         check(MyModel(), train, test)
 
 Model files name their model, so ``check_save_load_roundtrip`` registers an
-unregistered model under its ``name`` (or class name) before saving it.
+unregistered model under its ``name`` (or class name) for the round trip only.
 
 Every check is a small function ``check_<what>(estimator, train, test)``
 that fits clones of ``estimator`` (never ``estimator`` itself) on the
@@ -20,35 +20,98 @@ that fits clones of ``estimator`` (never ``estimator`` itself) on the
 """
 from __future__ import annotations
 
+import collections
 import copy
+import json
 import os
+import subprocess
+import sys
 import tempfile
+import unittest
+from dataclasses import dataclass
 
 import numpy as np
 
-from dam.base import NotFittedError, Synthesizer, UnknownPhoneError, clone
-from dam.corpus.data import Alignment, Corpus
+from dam._params import InvalidParameterError, invalid_values
+from dam.base import TAGS, NotFittedError, Synthesizer, UnknownPhoneError, clone
+from dam.corpus.data import Alignment, Corpus, DataError
 
-__all__ = ["check_synthesizer", "all_checks", "clone", "default_corpora"]
+__all__ = ["check_synthesizer", "all_checks", "clone", "default_corpora", "each_test_setting", "SkipCheck",
+           "CheckResult"]
 
-_FIT_CACHE: dict = {}
+
+class SkipCheck(unittest.SkipTest):
+    """A check that does not apply to this model, with the reason.
+
+    pytest reports it as a skip (it is a ``unittest.SkipTest``);
+    :func:`check_synthesizer` records it in its results. A check never passes
+    silently where it did not look.
+    """
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """What one check said: ``status`` is ``"passed"`` or ``"skipped"`` (with ``reason``)."""
+
+    check: str
+    status: str
+    reason: str = ""
+
+
+#: Fitted models the read-only checks share, least recently used dropped first.
+FIT_CACHE_SIZE = 8
+_FIT_CACHE: collections.OrderedDict = collections.OrderedDict()
+_CORPORA: dict = {}
 
 
 def default_corpora() -> tuple[Corpus, Corpus]:
     """The bundled ``tiny`` corpus split into train and test (fixed seed)."""
-    if "tiny" not in _FIT_CACHE:
+    if "tiny" not in _CORPORA:
         import dam.datasets as datasets
-        _FIT_CACHE["tiny"] = datasets.load("tiny").train_test_split(0.25, random_state=0)
-    return _FIT_CACHE["tiny"]
+        _CORPORA["tiny"] = datasets.load("tiny").train_test_split(0.25, random_state=0)
+    return _CORPORA["tiny"]
+
+
+@dataclass
+class _Fit:
+    """One fit of a fresh clone, with what the checks compare against: what ``fit`` returned,
+    the hyperparameters and the training trajectories before it, the model's attributes right
+    after it (before any prediction)."""
+
+    train: Corpus  # held, so that its id cannot be reused by another corpus while the entry lives
+    model: Synthesizer
+    returned: object
+    params_before: dict
+    trajectories_before: list
+    state_after_fit: dict
+
+
+def _fit_record(estimator: Synthesizer, train: Corpus) -> _Fit:
+    """The shared fit of a clone of ``estimator`` on ``train`` (at most :data:`FIT_CACHE_SIZE` are kept):
+    one fit serves every check that does not need a fit of its own."""
+    key = (type(estimator), repr(sorted(estimator.get_params().items(), key=lambda kv: kv[0])), id(train))
+    if key in _FIT_CACHE:
+        _FIT_CACHE.move_to_end(key)
+        return _FIT_CACHE[key]
+    model = clone(estimator)
+    params_before = copy.deepcopy(model.get_params())
+    trajectories_before = [u.trajectory.copy() for u in train]
+    returned = model.fit(train)
+    _FIT_CACHE[key] = _Fit(train, model, returned, params_before, trajectories_before,
+                           {k: _snapshot(v) for k, v in vars(model).items()})
+    while len(_FIT_CACHE) > FIT_CACHE_SIZE:
+        _FIT_CACHE.popitem(last=False)
+    return _FIT_CACHE[key]
 
 
 def _fitted(estimator: Synthesizer, train: Corpus) -> Synthesizer:
     """A fitted clone, shared between the checks that only read it."""
-    key = (type(estimator), repr(sorted(estimator.get_params().items(), key=lambda kv: kv[0])), id(train))
-    if key not in _FIT_CACHE:
-        # The entry holds ``train`` too: while it lives, its id cannot be reused by another corpus.
-        _FIT_CACHE[key] = (train, clone(estimator).fit(train))
-    return _FIT_CACHE[key][1]
+    return _fit_record(estimator, train).model
+
+
+def each_test_setting(cls: type) -> list[Synthesizer]:
+    """One unfitted ``cls`` per setting of ``cls.get_test_params()`` (the suite runs them all)."""
+    return [cls(**params) for params in cls.get_test_params()]
 
 
 def _name(est) -> str:
@@ -71,15 +134,78 @@ def check_init_stores_params(estimator, train, test):
         pass
     else:
         raise AssertionError(f"{_name(estimator)}: set_params accepted an unknown parameter")
-    tags = type(estimator).get_tags()
-    assert set(tags["reads"]) <= {"phones", "audio"}, f"{_name(estimator)}: bad 'reads' tag {tags['reads']}"
     tps = type(estimator).get_test_params()
     assert isinstance(tps, list) and len(tps) >= 2, f"{_name(estimator)}: get_test_params must give two settings"
 
 
+def check_tags(estimator, train, test):
+    """Every tag the class sets is in the register (:data:`dam.base.TAGS`) with a value of its type,
+    and ``requires`` names extras dam declares."""
+    try:
+        tags = type(estimator).get_tags()
+    except TypeError as exc:
+        raise AssertionError(str(exc)) from None
+    assert set(tags) == set(TAGS), f"{_name(estimator)}: tags {sorted(tags)} differ from the register {sorted(TAGS)}"
+    extras = _dam_extras()
+    if extras:
+        unknown = [e for e in tags["requires"] if e not in extras]
+        assert not unknown, f"{_name(estimator)}: tag 'requires' names {unknown}, not extras of dam ({sorted(extras)})"
+
+
+def _dam_extras() -> set:
+    try:
+        from importlib.metadata import metadata
+        return set(metadata("dam").get_all("Provides-Extra") or [])
+    except Exception:  # not installed as a distribution: nothing to compare with
+        return set()
+
+
+def check_parameter_constraints(estimator, train, test):
+    """Every parameter declares its constraints; the defaults and every ``get_test_params``
+    setting satisfy them; and every wrong-typed or out-of-range value the declarations
+    imply is refused by ``fit`` with an :class:`~dam.InvalidParameterError` that names the
+    class, the parameter and the value."""
+    cls = type(estimator)
+    names = set(cls._param_names())
+    declared = cls.get_parameter_constraints()
+    missing = sorted(names - set(declared))
+    assert not missing, (f"{cls.__name__}: no constraints declared for {missing}; add them to "
+                         "_parameter_constraints (see dam._params)")
+    for klass in cls.__mro__:  # Synthesizer's own declarations are conventions for whoever has the parameter
+        if klass is Synthesizer or not issubclass(klass, Synthesizer):
+            continue
+        stray = sorted(set(klass.__dict__.get("_parameter_constraints") or {}) - names)
+        assert not stray, (f"{klass.__name__}: _parameter_constraints declares {stray}, which are not parameters "
+                           f"of {cls.__name__}")
+    for params in [{}] + cls.get_test_params():
+        try:
+            cls(**params)._validate_params()
+        except InvalidParameterError as exc:
+            raise AssertionError(f"{cls.__name__}: the setting {params} breaks its own constraints: {exc}") from None
+    for name, specs in declared.items():
+        bad = invalid_values(specs)
+        assert bad, f"{cls.__name__}: the constraints of {name!r} refuse nothing"
+        for kind, value in bad:
+            assert_refused(estimator, name, value, train, f"{kind} value")
+
+
+def assert_refused(estimator, name: str, value, train: Corpus, what: str = "value") -> None:
+    """``fit`` with ``name=value`` raises an InvalidParameterError naming the class, ``name`` and ``value``."""
+    cls = type(estimator)
+    est = clone(estimator).set_params(**{name: value})
+    try:
+        est.fit(train)
+    except InvalidParameterError as exc:
+        msg = str(exc)
+        assert cls.__name__ in msg and repr(name) in msg and repr(value) in msg, \
+            f"{cls.__name__}: the error for {name}={value!r} must name the class, the parameter and the value: {msg}"
+    else:
+        raise AssertionError(f"{cls.__name__}: fit accepted the {what} {name}={value!r}")
+
+
 def check_fit_returns_self(estimator, train, test):
-    est = clone(estimator)
-    assert est.fit(train) is est, f"{_name(estimator)}: fit must return self"
+    fit = _fit_record(estimator, train)
+    assert fit.returned is fit.model, f"{_name(estimator)}: fit must return self"
 
 
 def check_not_fitted(estimator, train, test):
@@ -98,7 +224,8 @@ def check_predict_shapes_finite(estimator, train, test):
     assert isinstance(out, list) and len(out) == len(alignments), "a list in must give a list out"
     for a, u, y in zip(alignments, test, out):
         n = a.n_frames(est.frame_rate_)
-        assert y.shape == (n, train.n_channels), f"{_name(estimator)}: shape {y.shape}, expected {(n, train.n_channels)}"
+        assert y.shape == (n, train.n_channels), \
+            f"{_name(estimator)}: shape {y.shape}, expected {(n, train.n_channels)}"
         assert n == u.n_frames, f"alignment of {u.name} covers {n} frames, the utterance has {u.n_frames}"
         assert np.all(np.isfinite(y)), f"{_name(estimator)}: non-finite prediction for {u.name}"
     single = est.predict(alignments[0])
@@ -108,32 +235,30 @@ def check_predict_shapes_finite(estimator, train, test):
 
 
 def check_inputs_not_mutated(estimator, train, test):
-    before_train = [u.trajectory.copy() for u in train]
-    before_align = [(a.labels, a.starts.copy(), a.ends.copy()) for a in test.alignments]
-    est = clone(estimator).fit(train)
-    est.predict(test.alignments)
-    for u, y in zip(train, before_train):
+    """``fit`` leaves the training trajectories alone and ``predict`` the alignments."""
+    fit = _fit_record(estimator, train)
+    for u, y in zip(fit.train, fit.trajectories_before):
         assert np.array_equal(u.trajectory, y), f"{_name(estimator)}: fit changed the trajectory of {u.name}"
+    before_align = [(a.labels, a.starts.copy(), a.ends.copy()) for a in test.alignments]
+    fit.model.predict(test.alignments)
     for a, (lab, s, e) in zip(test.alignments, before_align):
         assert a.labels == lab and np.array_equal(a.starts, s) and np.array_equal(a.ends, e), \
             f"{_name(estimator)}: predict changed an alignment"
 
 
 def check_params_not_overwritten(estimator, train, test):
-    est = clone(estimator)
-    before = copy.deepcopy(est.get_params())
-    est.fit(train)
-    assert _equal(est.get_params(), before), \
-        f"{_name(estimator)}: fit changed hyperparameters: {before} -> {est.get_params()}"
+    fit = _fit_record(estimator, train)
+    assert _equal(fit.model.get_params(), fit.params_before), \
+        f"{_name(estimator)}: fit changed hyperparameters: {fit.params_before} -> {fit.model.get_params()}"
 
 
 def check_refit_idempotent(estimator, train, test):
     if not type(estimator).get_tags()["deterministic"]:
-        return
+        raise SkipCheck("not tagged deterministic: check_same_seed_same_model applies instead")
     est = clone(estimator)
     first = est.fit(train).predict(test.alignments)
     second = est.fit(train).predict(test.alignments)
-    third = clone(estimator).fit(train).predict(test.alignments)
+    third = _fitted(estimator, train).predict(test.alignments)  # a fresh clone's fit, shared
     for a, b, c in zip(first, second, third):
         np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-8,
                                    err_msg=f"{_name(estimator)}: refitting the same object changed predictions")
@@ -143,15 +268,22 @@ def check_refit_idempotent(estimator, train, test):
 
 def check_save_load_roundtrip(estimator, train, test):
     from dam.base import load
-    from dam.registry import _REGISTRY, register
-    name = estimator.name or type(estimator).__name__
-    if name not in _REGISTRY:  # a student's model: files name their model, so it must be registered
-        register(name, type(estimator))
+    from dam.registry import names, register, registered_name, unregister
+    # a student's model: files name their model, so it is registered for the round trip only
+    temporary = None if registered_name(type(estimator)) else (estimator.name or type(estimator).__name__)
+    if temporary in names():  # the name belongs to another class: do not shadow it
+        temporary = f"conformance-{type(estimator).__module__}.{type(estimator).__qualname__}"
+    if temporary:
+        register(temporary, type(estimator))
     est = _fitted(estimator, train)
-    with tempfile.TemporaryDirectory() as d:
-        path = os.path.join(d, "model.dam")
-        est.save(path)
-        back = load(path)
+    try:
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "model.dam")
+            est.save(path)
+            back = load(path)
+    finally:
+        if temporary:
+            unregister(temporary)
     assert type(back) is type(est), f"loaded a {type(back).__name__}, saved a {type(est).__name__}"
     assert _equal(back.get_params(), est.get_params()), f"{_name(estimator)}: params changed by save/load"
     for a in test.alignments:
@@ -166,13 +298,18 @@ def check_time_shift_equivariance(estimator, train, test):
     a model with context may legitimately react to; so the comparison skips
     the first two original segments and asks that the median absolute
     difference stay below 2% of each channel's spread, and below the
-    difference to the unshifted prediction.
+    difference to the unshifted prediction. A leading silence is dropped
+    first (the data model merges adjacent silences, so the shift would
+    otherwise lengthen it rather than add a segment).
     """
     est = _fitted(estimator, train)
     k = 7
     scale = np.concatenate(train.trajectories).std(axis=0) + 1e-12
     compared = 0
     for a in test.alignments[:3]:
+        if len(a) > 2 and a.labels[0] == a.silence:
+            a = Alignment(a.labels[1:], a.starts[1:] - a.starts[1], a.ends[1:] - a.starts[1],
+                          source=a.source, silence=a.silence)
         base = est.predict(a)
         moved = est.predict(a.shifted(k / est.frame_rate_))
         start = int(np.ceil(a.ends[min(1, len(a) - 1)] * est.frame_rate_))
@@ -229,12 +366,159 @@ def check_bad_input(estimator, train, test):
 def check_beats_phone_mean(estimator, train, test):
     """Held-out RMSE below the per-phone-mean baseline on the bundled corpus."""
     if type(estimator).get_tags().get("reference"):
-        return
+        raise SkipCheck("tagged reference: it is the baseline the others must beat")
     from dam.evaluation.metrics import evaluate
     from dam.registry import make
     ours = evaluate(_fitted(estimator, train), test).rmse
     ref = evaluate(_fitted(make("phone-mean"), train), test).rmse
     assert ours < ref, f"{_name(estimator)}: held-out RMSE {ours:.4g} does not beat phone-mean {ref:.4g}"
+
+
+def check_predict_leaves_model_unchanged(estimator, train, test):
+    """``predict`` changes no attribute of the model, adds none and removes none: the attributes
+    after predicting are those recorded right after the fit, before any prediction.
+
+    Arrays and containers are compared by value; other objects (a compiled
+    network, say) by identity.
+    """
+    fit = _fit_record(estimator, train)
+    est, before = fit.model, fit.state_after_fit
+    est.predict(test.alignments)
+    est.predict(test[0].alignment)
+    after = vars(est)
+    added = sorted(set(after) - set(before))
+    removed = sorted(set(before) - set(after))
+    changed = sorted(k for k in set(before) & set(after) if not _same_state(before[k], after[k]))
+    assert not (added or removed or changed), (
+        f"{_name(estimator)}: predict changed the model (added {added}, removed {removed}, changed {changed}); "
+        "prediction must be stateless")
+
+
+class _Opaque:
+    """An object the snapshot does not copy: compared by identity."""
+
+    def __init__(self, obj):
+        self.obj = obj
+
+
+def _snapshot(v):
+    if isinstance(v, np.ndarray):
+        return v.copy()
+    if isinstance(v, dict):
+        return {k: _snapshot(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return type(v)(_snapshot(x) for x in v) if type(v) in (list, tuple) else _Opaque(v)
+    if v is None or isinstance(v, (str, bytes, int, float, complex, bool, np.generic)):
+        return v
+    return _Opaque(v)
+
+
+def _same_state(before, now) -> bool:
+    if isinstance(before, _Opaque):
+        return before.obj is now
+    if isinstance(before, np.ndarray):
+        return isinstance(now, np.ndarray) and before.dtype == now.dtype and np.array_equal(before, now, equal_nan=
+                                                                                              before.dtype.kind in "fc")
+    if isinstance(before, dict):
+        return isinstance(now, dict) and before.keys() == now.keys() and all(_same_state(before[k], now[k])
+                                                                             for k in before)
+    if isinstance(before, (list, tuple)):
+        return type(now) is type(before) and len(now) == len(before) and all(
+            _same_state(a, b) for a, b in zip(before, now))
+    return type(before) is type(now) and (before == now or (before != before and now != now))
+
+
+def check_empty_corpus(estimator, train, test):
+    """An empty corpus is refused with a DataError where it is built, so ``fit`` never sees one;
+    ``fit`` of an empty list is a TypeError."""
+    try:
+        Corpus([], source="empty-corpus")
+    except DataError as exc:
+        assert "empty" in str(exc), f"the empty-corpus error must say so: {exc}"
+    else:
+        raise AssertionError("dam.Corpus([]) was accepted")
+    try:
+        clone(estimator).fit([])
+    except TypeError:
+        pass
+    else:
+        raise AssertionError(f"{_name(estimator)}: fit accepted an empty list instead of a Corpus")
+
+
+def check_one_utterance_corpus(estimator, train, test):
+    """A corpus of one utterance: a valid fit (finite predictions of the right shape) or a
+    DataError / InvalidParameterError that says what is missing, leaving the model unfitted."""
+    one = Corpus([train[0]], name="one-utterance")
+    est = clone(estimator)
+    try:
+        est.fit(one)
+    except (DataError, InvalidParameterError) as exc:
+        assert str(exc), f"{_name(estimator)}: an empty error message for a one-utterance corpus"
+        assert not est.is_fitted(), f"{_name(estimator)}: a failed fit left the model fitted"
+        return
+    y = est.predict(one[0].alignment)
+    assert y.shape == one[0].trajectory.shape, f"{_name(estimator)}: shape {y.shape} on a one-utterance corpus"
+    assert np.all(np.isfinite(y)), f"{_name(estimator)}: non-finite prediction after a one-utterance fit"
+
+
+def check_same_seed_same_model(estimator, train, test):
+    """Two fits with the same ``random_state`` predict the same (models not tagged deterministic)."""
+    params = estimator.get_params()
+    if "random_state" not in params:
+        raise SkipCheck("no random_state parameter")
+    if type(estimator).get_tags()["deterministic"]:
+        raise SkipCheck("tagged deterministic: check_refit_idempotent compares refits")
+    seed = 0 if params["random_state"] is None else params["random_state"]
+    first = clone(estimator).set_params(random_state=seed).fit(train).predict(test.alignments)
+    second = clone(estimator).set_params(random_state=seed).fit(train).predict(test.alignments)
+    for a, b in zip(first, second):
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-8,
+                                   err_msg=f"{_name(estimator)}: random_state={seed} twice gave other predictions")
+
+
+_NUMPY_RUNTIME = """
+import json, sys
+for blocked in ("scipy", "sklearn", "jax", "matplotlib", "pandas", "torch"):
+    sys.modules[blocked] = None  # importing any of them now fails
+import numpy as np
+import dam
+from dam import registry
+from dam.modelfile import read_model_file
+args = json.loads(sys.argv[1])
+name = read_model_file(args["path"])[0]["model"]
+if name not in registry.names():
+    registry.register(name, args["class"])
+model = dam.load(args["path"])
+a = dam.Alignment(args["labels"], args["starts"], args["ends"])
+from dam.corpus.atomic import atomic_write
+with atomic_write(args["out"], "wb") as fh:
+    np.save(fh, model.predict(a))
+"""
+
+
+def check_numpy_runtime(estimator, train, test):
+    """A model tagged ``numpy_runtime`` loads and predicts in a fresh Python where scipy,
+    scikit-learn, jax, matplotlib and pandas cannot be imported, and predicts the same."""
+    cls = type(estimator)
+    if not cls.get_tags()["numpy_runtime"]:
+        raise SkipCheck("not tagged numpy_runtime")
+    if "<locals>" in cls.__qualname__ or cls.__module__ == "__main__":
+        raise SkipCheck(f"{cls.__qualname__} cannot be imported by another Python (defined in a function "
+                        "or __main__)")
+    est = _fitted(estimator, train)
+    a = test[0].alignment
+    with tempfile.TemporaryDirectory() as d:
+        path, out = os.path.join(d, "model.dam"), os.path.join(d, "y.npy")
+        est.save(path)
+        args = {"path": path, "out": out, "class": f"{cls.__module__}:{cls.__qualname__}",
+                "labels": list(a.labels), "starts": a.starts.tolist(), "ends": a.ends.tolist()}
+        proc = subprocess.run([sys.executable, "-c", _NUMPY_RUNTIME, json.dumps(args)], capture_output=True,
+                              text=True)
+        assert proc.returncode == 0, (f"{_name(estimator)}: tagged numpy_runtime, but loading and predicting "
+                                      f"with numpy alone failed:\n{proc.stderr[-2000:]}")
+        y = np.load(out)
+    np.testing.assert_allclose(y, est.predict(a), rtol=1e-6, atol=1e-9,
+                               err_msg=f"{_name(estimator)}: the numpy-only prediction differs")
 
 
 def _equal(a, b) -> bool:
@@ -247,9 +531,11 @@ def _equal(a, b) -> bool:
     return a == b or (a != a and b != b)
 
 
-_CHECKS = [check_init_stores_params, check_fit_returns_self, check_not_fitted, check_predict_shapes_finite,
-           check_inputs_not_mutated, check_params_not_overwritten, check_refit_idempotent,
-           check_save_load_roundtrip, check_time_shift_equivariance, check_bad_input, check_beats_phone_mean]
+_CHECKS = [check_init_stores_params, check_tags, check_parameter_constraints, check_fit_returns_self,
+           check_not_fitted, check_predict_shapes_finite, check_inputs_not_mutated, check_params_not_overwritten,
+           check_predict_leaves_model_unchanged, check_refit_idempotent, check_same_seed_same_model,
+           check_save_load_roundtrip, check_numpy_runtime, check_time_shift_equivariance, check_bad_input,
+           check_empty_corpus, check_one_utterance_corpus, check_beats_phone_mean]
 
 
 def all_checks() -> list:
@@ -257,17 +543,33 @@ def all_checks() -> list:
     return list(_CHECKS)
 
 
-def check_synthesizer(estimator: Synthesizer, train: Corpus | None = None, test: Corpus | None = None) -> None:
+def check_synthesizer(estimator: Synthesizer, train: Corpus | None = None,
+                      test: Corpus | None = None) -> list[CheckResult]:
     """Run every check on ``estimator``; raise AssertionError on the first failure.
 
     Parameters
     ----------
     estimator : Synthesizer
-        Unfitted; it is cloned, never fitted itself.
+        Unfitted; it is cloned, never fitted itself. To run every setting of
+        ``get_test_params`` as the project's tests do, call this on each of
+        :func:`each_test_setting`.
     train, test : Corpus, optional
         Defaults to the bundled ``tiny`` corpus split 75/25.
+
+    Returns
+    -------
+    list of CheckResult
+        One per check: ``"passed"``, or ``"skipped"`` with the reason (a
+        check that does not apply says so; none passes silently).
     """
     if train is None or test is None:
         train, test = default_corpora()
+    results = []
     for check in _CHECKS:
-        check(estimator, train, test)
+        try:
+            check(estimator, train, test)
+        except SkipCheck as exc:
+            results.append(CheckResult(check.__name__, "skipped", str(exc)))
+        else:
+            results.append(CheckResult(check.__name__, "passed"))
+    return results

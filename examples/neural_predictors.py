@@ -2,29 +2,30 @@
 
 Fits Taylor et al.'s sliding-window network, Medina et al.'s causal MLP, a
 GRU and a bidirectional GRU, and their Transformer on the bundled corpus,
-then saves two figures: training and validation loss per epoch (early
-stopping keeps the best epoch, marked), and the predictions of one test
-utterance against the truth. Needs the ``jax`` extra.
+then saves two figures (:mod:`dam.evaluation.figures`): training and
+validation loss per epoch (early stopping keeps the best epoch, marked), and
+the predictions of one test utterance against the truth, one panel per model
+and channel. Needs the ``jax`` extra (``pip install "dam[jax]"``).
 
-    python examples/neural_predictors.py [--corpus tiny|vtl] [--out examples/out/neural]
+    python examples/neural_predictors.py [--corpus tiny|vtl] [--out DIR] [--quick]
 
-On ``tiny`` (the default) it runs in about a minute with small settings; on
-``vtl`` the models keep their defaults (a few minutes each on a CPU).
+On ``tiny`` (the default) it runs in about a minute with small settings;
+``--quick`` trains two small networks for a few epochs (seconds, a smoke
+test); on ``vtl`` the models keep their defaults (a few minutes each on a
+CPU). Figures go to ``--out`` (default ``dam-examples/neural_predictors/`` in
+the working directory, which git ignores).
 """
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-import matplotlib
+import dam
+from dam import plotting
+from dam.evaluation.figures import plot_loss_curves, plot_predictions
+from dam.evaluation.metrics import evaluate
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-import dam  # noqa: E402
-from dam.evaluation.metrics import evaluate  # noqa: E402
-
+NAME = "neural_predictors"
 SMALL = {  # for the tiny corpus: small networks, more epochs
     "sliding-dnn": {"hidden_layer_sizes": (64, 64), "dropout": 0.2, "max_epochs": 60, "patience": 8},
     "causal-mlp": {"hidden_layer_sizes": (64,), "max_epochs": 60, "patience": 8},
@@ -32,56 +33,49 @@ SMALL = {  # for the tiny corpus: small networks, more epochs
     "bi-gru": {"hidden_size": 32, "seq_len": 50, "bidirectional": True, "max_epochs": 60, "patience": 8},
     "transformer": {"d_model": 32, "d_ff": 64, "n_layers": 2, "max_epochs": 60, "patience": 8},
 }
+QUICK = {"sliding-dnn": {"hidden_layer_sizes": (16,), "max_epochs": 3},
+         "causal-mlp": {"hidden_layer_sizes": (16,), "max_epochs": 3}}
 
 
-def main(argv=None):
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default="tiny", help="tiny (hold-out quarter) or vtl (train/test)")
-    ap.add_argument("--out", default=str(Path(__file__).parent / "out" / "neural"))
+    ap.add_argument("--out", default=str(Path.cwd() / "dam-examples" / NAME),
+                    help=f"output directory (default: ./dam-examples/{NAME})")
+    ap.add_argument("--quick", action="store_true", help="two small feed-forward networks, three epochs, tiny (a smoke test)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    if args.corpus == "tiny":
+    corpus = "tiny" if args.quick else args.corpus
+    if corpus == "tiny":
         train, test = dam.datasets.load("tiny").train_test_split(0.25, random_state=0)
+        where = "tiny (held-out quarter)"
     else:
-        train, test = dam.datasets.load(args.corpus, split="train"), dam.datasets.load(args.corpus, split="test")
+        train, test = dam.datasets.load(corpus, split="train"), dam.datasets.load(corpus, split="test")
+        where = f"{corpus}:test"
 
-    models = {}
-    for label, small in SMALL.items():
+    settings = QUICK if args.quick else SMALL
+    models, rows = {}, []
+    for label, small in settings.items():
         name = "gru" if label == "bi-gru" else label
-        params = small if args.corpus == "tiny" else {k: v for k, v in small.items() if k == "bidirectional"}
+        params = small if corpus == "tiny" else {k: v for k, v in small.items() if k == "bidirectional"}
         models[label] = dam.make(name, unknown_phone="fallback", **params).fit(train)
-        print(f"{label:12s} held-out RMSE {evaluate(models[label], test).rmse:.4g} "
-              f"({models[label].n_epochs_} epochs, best {models[label].best_epoch_})")
-
-    fig, axes = plt.subplots(1, len(models), figsize=(3.2 * len(models), 3), sharey=True)
-    for ax, (label, m) in zip(axes, models.items()):
-        epochs = np.arange(1, m.n_epochs_ + 1)
-        ax.semilogy(epochs, m.loss_curve_, label="training (dropout on)")
-        ax.semilogy(epochs, m.validation_curve_, label="validation")
-        ax.axvline(m.best_epoch_, color="k", lw=0.8, ls=":", label="kept")
-        ax.set_title(label)
-        ax.set_xlabel("epoch")
-    axes[0].set_ylabel("MSE (standardized channels)")
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "loss_curves.png", dpi=120)
+        rmse = evaluate(models[label], test).rmse
+        rows.append({"model": label, "status": "ok", "rmse": rmse})
+        print(f"{label:12s} held-out RMSE {rmse:.4g} ({models[label].n_epochs_} epochs, "
+              f"best {models[label].best_epoch_})")
+    rows.sort(key=lambda r: r["rmse"])
 
     u = test[0]
-    t = np.arange(u.n_frames) / u.frame_rate
-    n_ch = min(4, u.n_channels)
-    fig, axes = plt.subplots(n_ch, 1, figsize=(8, 1.8 * n_ch), sharex=True)
-    for c, ax in enumerate(np.atleast_1d(axes)):
-        ax.plot(t, u.trajectory[:, c], "k", lw=2, label="truth")
-        for label, m in models.items():
-            ax.plot(t, m.predict(u.alignment)[:, c], lw=1, label=label)
-        ax.set_ylabel(u.channels[c])
-    np.atleast_1d(axes)[0].legend(fontsize=7, ncol=3)
-    np.atleast_1d(axes)[-1].set_xlabel("time (s)")
-    fig.tight_layout()
-    fig.savefig(out / "predictions.png", dpi=120)
-    print(f"wrote {out / 'loss_curves.png'} and {out / 'predictions.png'}")
+    example = {"utterance": u.name, "frame_rate": u.frame_rate, "channels": list(u.channels), "truth": u.trajectory,
+               "alignment": u.alignment, "units": test.metadata.get("units"),
+               "predictions": {label: m.predict(u.alignment) for label, m in models.items()}}
+    paths = [plotting.save(plot_loss_curves(models, corpus=where), out / "loss_curves.png"),
+             plotting.save(plot_predictions(example, rows, corpus=where, max_models=len(models)),
+                           out / "predictions.png")]
+    print(f"wrote {paths[0]} and {paths[1]}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -15,7 +15,7 @@ ROOT = Path(dam.__file__).resolve().parent.parent
 # A module may import from its own rank or lower (README, "Architecture").
 RANKS = {
     "dam._version": 0, "dam._lazy": 0, "dam._compat": 0, "dam.corpus": 0,
-    "dam.base": 1, "dam.modelfile": 1, "dam.registry": 1, "dam.plotting": 1, "dam.progress": 1,
+    "dam.base": 1, "dam._params": 1, "dam.modelfile": 1, "dam.registry": 1, "dam.plotting": 1, "dam.progress": 1,
     "dam.model": 2,
     "dam.datasets": 3, "dam.crossmap": 3, "dam.speech": 3,
     "dam.export": 4, "dam.evaluation": 4,

@@ -23,10 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Synthesizer
+from dam import Interval, Options, Synthesizer
 from dam import Alignment, Corpus
 
-from .encoders import ENCODERS, encoder_from_state, make_encoder
+from .encoders import ENCODERS, EncoderSpec, encoder_from_state, encoder_reads, make_encoder
 
 __all__ = ["NeuralSynthesizer"]
 
@@ -34,10 +34,17 @@ __all__ = ["NeuralSynthesizer"]
 class NeuralSynthesizer(Synthesizer):
     """Base class of the neural predictors (jax + equinox + optax).
 
-    Every subclass has these hyperparameters (besides its network's):
+    Every subclass has these hyperparameters (besides its network's).
 
+    Parameters
+    ----------
     encoder : str, default "phones"
-        The input encoder (:data:`baselines.nn.encoders.ENCODERS`).
+        The input encoder (:data:`baselines.nn.encoders.ENCODERS`): ``"phones"``
+        (the alignment), or ``"mfcc"``, ``"fbank"``, ``"features"``, which read
+        the utterance's audio (or ``<stem>.features.npy``) and refuse a corpus
+        without it; audio encoders take options, ``"mfcc:n_mfcc=27,window=0.02"``.
+        A model with an audio encoder predicts from an Utterance with audio or a
+        :class:`dam.corpus.AudioClip` (:meth:`predict_audio` reads a file).
     optimizer : {"adam", "sgd"}
         optax Adam, or SGD with momentum 0.9.
     learning_rate : float
@@ -80,6 +87,16 @@ class NeuralSynthesizer(Synthesizer):
     """
 
     _tags = {"requires": ("jax",), "deterministic": True, "slow": True}
+    _parameter_constraints = {
+        "encoder": [EncoderSpec(ENCODERS)],
+        "optimizer": [Options({"adam", "sgd"})],
+        "learning_rate": [Interval(float, 0, None, closed="neither")],
+        "batch_size": [Interval(int, 1, None, closed="left")],
+        "max_epochs": [Interval(int, 0, None, closed="left")],
+        "patience": [Interval(int, 1, None, closed="left")],
+        "validation_fraction": [Interval(float, 0, 1, closed="left")],
+        "dropout": [Interval(float, 0, 1, closed="left")],
+    }  # unknown_phone, random_state and verbose: as declared by dam.Synthesizer; the network's: subclasses
     _clip_norm: float | None = None  # recurrent networks clip their gradients
 
     # -- hooks ---------------------------------------------------------------
@@ -97,42 +114,6 @@ class NeuralSynthesizer(Synthesizer):
 
     def _forward(self, network, encoder, alignment: Alignment, n_frames: int) -> np.ndarray:  # pragma: no cover
         raise NotImplementedError
-
-    def _check_network_params(self) -> None:
-        """Validate the network's own hyperparameters (override)."""
-
-    def _check_positive_ints(self, *names: str) -> None:
-        """Raise ValueError naming the first of ``names`` that is not a positive integer."""
-        for name in names:
-            v = getattr(self, name)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
-                raise ValueError(f"{type(self).__name__}: parameter {name!r} is {v!r}; must be a positive integer")
-
-    # -- validation ----------------------------------------------------------
-    def _check_params(self) -> None:
-        cls = type(self).__name__
-
-        def bad(name, rule):
-            raise ValueError(f"{cls}: parameter {name!r} is {getattr(self, name)!r}; {rule}")
-
-        self._check_positive_ints("batch_size", "patience")
-        if not isinstance(self.max_epochs, (int, np.integer)) or self.max_epochs < 0:
-            bad("max_epochs", "must be a non-negative integer")
-        if not (isinstance(self.learning_rate, (int, float)) and self.learning_rate > 0):
-            bad("learning_rate", "must be a positive number")
-        if not (0.0 <= self.dropout < 1.0):
-            bad("dropout", "must be in [0, 1)")
-        if not (0.0 <= self.validation_fraction < 1.0):
-            bad("validation_fraction", "must be in [0, 1)")
-        if self.optimizer not in ("adam", "sgd"):
-            bad("optimizer", "use 'adam' or 'sgd'")
-        if self.encoder not in ENCODERS:
-            bad("encoder", f"available encoders: {', '.join(ENCODERS)}")
-        if self.unknown_phone not in ("error", "fallback"):
-            bad("unknown_phone", "use 'error' or 'fallback'")
-        if self.random_state is not None and not isinstance(self.random_state, (int, np.integer)):
-            bad("random_state", "must be an int or None")
-        self._check_network_params()
 
     # -- fitting -------------------------------------------------------------
     def _seed(self) -> int:
@@ -161,7 +142,7 @@ class NeuralSynthesizer(Synthesizer):
     def _fit(self, corpus: Corpus) -> None:
         import jax
 
-        from .train import make_optimizer, network_leaves, train_network
+        from .train import network_leaves
 
         self._net = self._encoder = None  # caches of a previous fit
         seed = self._seed()
@@ -176,13 +157,10 @@ class NeuralSynthesizer(Synthesizer):
         Xv, Yv, Wv = self._stack(encoder, val)
         self.n_inputs_, self.n_outputs_ = int(X.shape[-1]), int(Yt.shape[-1])
         net = self._make_network(self.n_inputs_, self.n_outputs_, seed)
-        net, hist = train_network(
-            net, X, Yt, W, X_val=Xv, Y_val=Yv, W_val=Wv,
-            optimizer=make_optimizer(self.optimizer, self.learning_rate, self._clip_norm),
-            batch_size=self.batch_size, max_epochs=self.max_epochs, patience=self.patience,
-            key=jax.random.key(seed), verbose=self.verbose, desc=self.name or type(self).__name__)
+        net, hist = self._train(net, (X, Yt, W), (Xv, Yv, Wv), jax.random.key(seed))
         self._net = net
         self._encoder = encoder
+        self._finish_fit(encoder, train, val)
         self.weights_ = network_leaves(net)
         self.n_parameters_ = int(sum(w.size for w in self.weights_))
         self.loss_curve_ = list(hist.loss_curve)
@@ -191,7 +169,58 @@ class NeuralSynthesizer(Synthesizer):
         self.n_epochs_ = len(hist.loss_curve)
         self.best_epoch_ = hist.best_epoch
 
+    def _train(self, net, train: tuple, val: tuple, key, loss=None, max_epochs: int | None = None):
+        """Run :func:`baselines.nn.train.train_network` with this model's settings
+        (a multi-stage model calls it once per stage with its own ``loss``)."""
+        from .train import make_optimizer, train_network
+        return train_network(
+            net, *train, X_val=val[0], Y_val=val[1], W_val=val[2],
+            optimizer=make_optimizer(self.optimizer, self.learning_rate, self._clip_norm),
+            batch_size=self.batch_size, max_epochs=self.max_epochs if max_epochs is None else max_epochs,
+            patience=self.patience, key=key, verbose=self.verbose, desc=self.name or type(self).__name__,
+            loss=loss)
+
+    def _finish_fit(self, encoder, train: list, val: list) -> None:
+        """Hook after training (the network is ``self._net``); e.g. thresholds chosen on ``val``."""
+
     # -- prediction ----------------------------------------------------------
+    def reads(self) -> tuple:
+        """``("audio",)`` with an audio encoder, else ``("phones",)``."""
+        return encoder_reads(self.encoder)
+
+    def predict_audio(self, audio, sample_rate: float | None = None) -> np.ndarray:
+        """Synthesize from audio alone (no transcript), with an audio encoder.
+
+        Parameters
+        ----------
+        audio : path-like or array-like, shape (n_samples,)
+            A sound file (WAV, FLAC ...; needs the ``audio`` extra) or samples.
+        sample_rate : float, optional
+            Required with samples.
+
+        Returns
+        -------
+        ndarray, shape (n_frames, n_channels)
+            ``n_frames = floor(duration * frame_rate_) + 1``.
+        """
+        import os
+
+        from dam.corpus import AudioClip
+        if "audio" not in self.reads():
+            raise TypeError(f"{type(self).__name__} with encoder={self.encoder!r} reads phones, not audio; "
+                            "fit it with an audio encoder (encoder='mfcc')")
+        if isinstance(audio, (str, os.PathLike)):
+            from dam.speech import load_audio
+            x, name = load_audio(audio, rate=16000)
+            return self.predict(AudioClip(x, 16000, name=name))
+        if sample_rate is None:
+            raise TypeError("predict_audio of samples needs their sample_rate")
+        return self.predict(AudioClip(audio, sample_rate))
+
+    def _predict_audio(self, source, n_frames: int) -> np.ndarray:
+        out = self._forward(self._network(), self._input_encoder(), source, n_frames)
+        return out * self.y_scale_ + self.y_mean_
+
     def _network(self):
         """The equinox network, rebuilt from ``weights_`` after loading."""
         if getattr(self, "_net", None) is None:

@@ -49,17 +49,7 @@ class CausalMLP(SlidingDNN):
 
     name = "causal-mlp"
     _align = "causal"
-
-    def __init__(self, *, kx: int = 15, ky: int = 5, features: str = "raw", hidden_layer_sizes: tuple = (512,),
-                 activation: str = "relu", dropout: float = 0.25, optimizer: str = "adam",
-                 learning_rate: float = 1e-3, batch_size: int = 32, max_epochs: int = 30, patience: int = 4,
-                 validation_fraction: float = 0.1, encoder: str = "phones", random_state: int | None = 0,
-                 verbose: int = 1, unknown_phone: str = "error"):
-        super().__init__(kx=kx, ky=ky, features=features, hidden_layer_sizes=hidden_layer_sizes,
-                         activation=activation, dropout=dropout, optimizer=optimizer,
-                         learning_rate=learning_rate, batch_size=batch_size, max_epochs=max_epochs,
-                         patience=patience, validation_fraction=validation_fraction, encoder=encoder,
-                         random_state=random_state, verbose=verbose, unknown_phone=unknown_phone)
+    _preset = {"kx": 15, "hidden_layer_sizes": (512,), "activation": "relu", "dropout": 0.25, "batch_size": 32}
 
     @classmethod
     def get_test_params(cls) -> list[dict]:

@@ -43,18 +43,7 @@ class FanLSTM(RecurrentDecoder):
     """
 
     name = "lstm"
-
-    def __init__(self, *, cell: str = "lstm", n_layers: int = 2, bidirectional: bool = True,
-                 hidden_size: int = 64, dense_size: int = 64, seq_len: int = 100, dropout: float = 0.5,
-                 optimizer: str = "adam", learning_rate: float = 3e-3, batch_size: int = 32,
-                 max_epochs: int = 40, patience: int = 5, validation_fraction: float = 0.1,
-                 encoder: str = "phones", random_state: int | None = 0, verbose: int = 1,
-                 unknown_phone: str = "error"):
-        super().__init__(cell=cell, n_layers=n_layers, bidirectional=bidirectional, hidden_size=hidden_size,
-                         dense_size=dense_size, seq_len=seq_len, dropout=dropout, optimizer=optimizer,
-                         learning_rate=learning_rate, batch_size=batch_size, max_epochs=max_epochs,
-                         patience=patience, validation_fraction=validation_fraction, encoder=encoder,
-                         random_state=random_state, verbose=verbose, unknown_phone=unknown_phone)
+    _preset = {"cell": "lstm", "bidirectional": True, "dense_size": 64, "dropout": 0.5}
 
     @classmethod
     def get_test_params(cls) -> list[dict]:

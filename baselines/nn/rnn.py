@@ -26,6 +26,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dam import Interval, Options
+
 from .base import NeuralSynthesizer
 from .train import predict_padded
 
@@ -173,6 +175,12 @@ class RecurrentDecoder(NeuralSynthesizer):
 
     name = "gru"
     _clip_norm = 1.0
+    _parameter_constraints = {
+        "cell": [Options(_CELLS)],
+        **dict.fromkeys(["n_layers", "hidden_size", "seq_len"], [Interval(int, 1, None, closed="left")]),
+        "dense_size": [Interval(int, 0, None, closed="left")],
+        "bidirectional": ["boolean"],
+    }
 
     def __init__(self, *, cell: str = "gru", n_layers: int = 2, bidirectional: bool = False,
                  hidden_size: int = 64, dense_size: int = 0, seq_len: int = 100, dropout: float = 0.25,
@@ -205,16 +213,6 @@ class RecurrentDecoder(NeuralSynthesizer):
                 {"cell": "lstm", "n_layers": 2, "bidirectional": True, "hidden_size": 8, "seq_len": 16,
                  "max_epochs": 2, "verbose": 0}]
 
-    def _check_network_params(self) -> None:
-        cls = type(self).__name__
-        if self.cell not in _CELLS:
-            raise ValueError(f"{cls}: parameter 'cell' is {self.cell!r}; use 'gru' or 'lstm'")
-        self._check_positive_ints("n_layers", "hidden_size", "seq_len")
-        if not isinstance(self.dense_size, (int, np.integer)) or self.dense_size < 0:
-            raise ValueError(f"{cls}: parameter 'dense_size' is {self.dense_size!r}; must be an integer >= 0")
-        if not isinstance(self.bidirectional, (bool, np.bool_)):
-            raise ValueError(f"{cls}: parameter 'bidirectional' is {self.bidirectional!r}; must be True or False")
-
     def _network_spec(self, n_inputs, n_outputs):
         return RecurrentNet, dict(n_inputs=n_inputs, n_outputs=n_outputs, cell=self.cell,
                                   hidden_size=int(self.hidden_size), n_layers=int(self.n_layers),
@@ -222,7 +220,7 @@ class RecurrentDecoder(NeuralSynthesizer):
                                   dropout=float(self.dropout))
 
     def _samples(self, encoder, utterance, y):
-        frames = encoder.frames(utterance.alignment, self.frame_rate_, utterance.n_frames)
+        frames = encoder.frames(utterance, self.frame_rate_, utterance.n_frames)
         L, n = int(self.seq_len), len(frames)
         starts = sequence_windows(n, L)
         X = np.zeros((len(starts), L, frames.shape[1]), frames.dtype)

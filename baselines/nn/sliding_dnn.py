@@ -23,6 +23,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dam import Interval, Options, TupleOf
+
 from .base import NeuralSynthesizer
 from .train import predict_padded
 
@@ -92,6 +94,12 @@ class SlidingDNN(NeuralSynthesizer):
     validation_fraction : float, default 0.1
     encoder, random_state, verbose, unknown_phone
         See :class:`baselines.nn.base.NeuralSynthesizer`.
+    window_rate : float or None, default None
+        Rate (Hz) of the window frames: ``window_rate=30`` spaces them
+        ``round(frame_rate / 30)`` frames apart, the paper's span of context
+        at 29.97 video frames per second (0.33 s for 11 frames at 100 Hz);
+        None uses every data frame (0.11 s at 100 Hz). The decision tree
+        (``dtree``) takes the same parameter (default 30).
 
     Attributes
     ----------
@@ -103,15 +111,24 @@ class SlidingDNN(NeuralSynthesizer):
     PAPER = {"hidden_layer_sizes": (3000, 3000, 3000), "dropout": 0.5, "batch_size": 100,
              "optimizer": "sgd", "learning_rate": 0.01, "kx": 11, "ky": 5, "activation": "tanh"}
     _align = "center"
+    _parameter_constraints = {
+        "kx": [Interval(int, 1, None, closed="left")],
+        "ky": [Interval(int, 1, None, closed="left")],
+        "features": [Options({"raw", "linguistic"})],
+        "activation": [Options(_ACTIVATIONS)],
+        "hidden_layer_sizes": [TupleOf(Interval(int, 1, None, closed="left"), min_len=0)],
+        "window_rate": [Interval(float, 0, None, closed="neither"), None],
+    }
 
     def __init__(self, *, kx: int = 11, ky: int = 5, features: str = "raw",
                  hidden_layer_sizes: tuple = (256, 256, 256), activation: str = "tanh", dropout: float = 0.5,
                  optimizer: str = "adam", learning_rate: float = 1e-3, batch_size: int = 100,
                  max_epochs: int = 30, patience: int = 4, validation_fraction: float = 0.1,
                  encoder: str = "phones", random_state: int | None = 0, verbose: int = 1,
-                 unknown_phone: str = "error"):
+                 unknown_phone: str = "error", window_rate: float | None = None):
         self.kx = kx
         self.ky = ky
+        self.window_rate = window_rate
         self.features = features
         self.hidden_layer_sizes = hidden_layer_sizes
         self.activation = activation
@@ -134,35 +151,27 @@ class SlidingDNN(NeuralSynthesizer):
                 {"features": "linguistic", "hidden_layer_sizes": (16, 16), "kx": 5, "ky": 3, "max_epochs": 3,
                  "verbose": 0}]
 
-    def _check_network_params(self) -> None:
-        self._check_positive_ints("kx", "ky")
-        if self.features not in ("raw", "linguistic"):
-            raise ValueError(f"{type(self).__name__}: parameter 'features' is {self.features!r}; "
-                             "use 'raw' or 'linguistic'")
-        if self.activation not in _ACTIVATIONS:
-            raise ValueError(f"{type(self).__name__}: parameter 'activation' is {self.activation!r}; "
-                             f"use one of {sorted(_ACTIVATIONS)}")
-        sizes = self.hidden_layer_sizes
-        if not (isinstance(sizes, (tuple, list)) and all(isinstance(h, (int, np.integer)) and h > 0 for h in sizes)):
-            raise ValueError(f"{type(self).__name__}: parameter 'hidden_layer_sizes' is {sizes!r}; "
-                             "must be a tuple of positive integers")
-
     def _network_spec(self, n_inputs, n_outputs):
         return WindowMLP, dict(n_inputs=n_inputs, n_outputs=n_outputs,
                                hidden=tuple(int(h) for h in self.hidden_layer_sizes),
                                activation=self.activation, dropout=float(self.dropout))
 
+    def _dilation(self) -> int:
+        """Frames between window frames (:func:`dam.corpus.window_dilation`; 1 without ``window_rate``)."""
+        from dam.corpus import window_dilation
+        return window_dilation(self.frame_rate_, getattr(self, "window_rate", None))
+
     def _inputs(self, encoder, alignment, n_frames):
         return encoder.windows(alignment, self.frame_rate_, n_frames, k=self.kx, align=self._align,
-                               features=self.features)
+                               features=self.features, dilation=self._dilation())
 
     def _samples(self, encoder, utterance, y):
         from dam.corpus import window_targets
-        X = self._inputs(encoder, utterance.alignment, utterance.n_frames)
-        Y = window_targets(y, ky=self.ky, align=self._align).astype(np.float32)
+        X = self._inputs(encoder, utterance, utterance.n_frames)
+        Y = window_targets(y, ky=self.ky, align=self._align, dilation=self._dilation()).astype(np.float32)
         return X, Y, np.ones(len(X), np.float32)
 
     def _forward(self, network, encoder, alignment, n_frames):
         from dam.corpus import overlap_average
         windows = predict_padded(network, self._inputs(encoder, alignment, n_frames))
-        return overlap_average(windows, self.ky, len(self.channels_), align=self._align)
+        return overlap_average(windows, self.ky, len(self.channels_), align=self._align, dilation=self._dilation())

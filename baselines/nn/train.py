@@ -11,7 +11,7 @@ window networks, the recurrent networks and the Transformer alike.
 The loop (:func:`train_network`): optax optimiser, explicit PRNG keys, one
 jit-compiled ``lax.scan`` per epoch over shuffled mini-batches, a validation
 set with early stopping on it (the weights of the best epoch are kept), and
-a tqdm progress bar on stderr showing the losses.
+progress per epoch (:mod:`dam.progress`) showing the losses.
 
 Prediction (:func:`predict_padded`): the input is padded to a bucketed
 length (a power of two) so that the jit cache is reused across utterances of
@@ -19,9 +19,9 @@ similar length; a second call with the same bucket never recompiles.
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
-import sys
 from dataclasses import dataclass, field
 
 import equinox as eqx
@@ -117,7 +117,7 @@ def _host(X, Y, W):
 
 def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer, batch_size: int,
                   max_epochs: int, patience: int, key, verbose: int = 1, desc: str = "training",
-                  tol: float = 0.0):
+                  tol: float = 0.0, loss=None):
     """Fit ``net`` to ``(X, Y, W)`` by mini-batch gradient descent on the weighted MSE.
 
     Parameters
@@ -135,11 +135,16 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
     key : jax PRNG key
         Drives shuffling and dropout; the same key gives the same weights.
     verbose : int, default 1
-        0 silences the progress bar; otherwise tqdm shows it on a terminal.
+        0 reports nothing; otherwise every epoch goes to :mod:`dam.progress` (the
+        command line's reporter, or a bar of its own on a terminal).
     desc : str
         Progress bar label.
     tol : float, default 0.0
         Minimum relative improvement of the validation loss that counts.
+    loss : callable, optional
+        ``loss(net, xb, yb, wb, key) -> scalar``, the mean loss of a batch
+        (``key=None``: inference). Default: the weighted MSE. Use a
+        module-level function: it is a static argument of the compiled epoch.
 
     Returns
     -------
@@ -147,7 +152,7 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
         The trained network (best validation epoch when validating).
     history : TrainHistory
     """
-    from tqdm.auto import tqdm
+    from dam import progress
 
     opt_state = optimizer.init(eqx.filter(net, eqx.is_inexact_array))
     host = _host(X, Y, W)
@@ -159,6 +164,8 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
     if validate:
         host_val = _host(X_val, Y_val, W_val)
 
+    loss_fn = _batch_loss if loss is None else loss
+
     def evaluate(net, X, Y, W):
         # Host-side chunks of one compiled size; padded rows carry weight 0.
         total = count = 0.0
@@ -167,38 +174,40 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
             pad = eval_chunk - sl[0].shape[0]
             if pad:
                 sl = [np.concatenate([a, np.zeros((pad,) + a.shape[1:], a.dtype)]) for a in sl]
-            s, c = _chunk_error(net, *sl)
+            s, c = _chunk_error(net, *sl) if loss is None else _chunk_loss(net, *sl, loss)
             total, count = total + float(s), count + float(c)
         return total / max(count, 1e-12)
 
     history = TrainHistory(initial_loss=evaluate(net, *host))
     best = (math.inf, net, 0)
-    bar = tqdm(range(1, max_epochs + 1), desc=desc, file=sys.stderr, leave=False,
-               disable=True if not verbose else None)
     since_best = 0
-    for epoch in bar:
-        net, opt_state, loss, key = _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size)
-        loss = float(loss)
-        if not math.isfinite(loss):
-            raise FloatingPointError(f"{desc}: the training loss became {loss} at epoch {epoch}; "
-                                     "lower the learning rate")
-        history.loss_curve.append(loss)
-        shown = {"loss": f"{loss:.4g}"}
-        if validate:
-            val = evaluate(net, *host_val)
-            history.validation_curve.append(val)
-            shown["val"] = f"{val:.4g}"
-            if val < best[0] * (1.0 - tol):
-                best, since_best = (val, net, epoch), 0
+    with contextlib.ExitStack() as stack:
+        if verbose and not progress.active():  # a library call: a bar of its own on a terminal
+            stack.enter_context(progress.reporting("auto"))
+        bar = stack.enter_context(progress.task(desc, max_epochs, unit="epoch")) if verbose else None
+        for epoch in range(1, max_epochs + 1):
+            net, opt_state, value, key = _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size, loss_fn)
+            value = float(value)
+            if not math.isfinite(value):
+                raise FloatingPointError(f"{desc}: the training loss became {value} at epoch {epoch}; "
+                                         "lower the learning rate")
+            history.loss_curve.append(value)
+            shown = f"loss {value:.4g}"
+            if validate:
+                val = evaluate(net, *host_val)
+                history.validation_curve.append(val)
+                shown += f", validation {val:.4g}"
+                if val < best[0] * (1.0 - tol):
+                    best, since_best = (val, net, epoch), 0
+                else:
+                    since_best += 1
             else:
-                since_best += 1
-        else:
-            best = (loss, net, epoch)
-        bar.set_postfix(shown, refresh=False)
-        if validate and since_best >= patience:
-            history.stopped_early = True
-            break
-    bar.close()
+                best = (value, net, epoch)
+            if bar is not None:
+                bar.step(f"epoch {epoch}: {shown}")
+            if validate and since_best >= patience:
+                history.stopped_early = True
+                break
     if max_epochs > 0:
         net = best[1]
         history.best_epoch = best[2]
@@ -213,7 +222,7 @@ def _batch_loss(net, xb, yb, wb, key):
 
 
 @eqx.filter_jit
-def _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size):
+def _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size, loss_fn=_batch_loss):
     """One pass over shuffled mini-batches as a single ``lax.scan``."""
     key, k_order, k_drop = jax.random.split(key, 3)
     order = _epoch_order(k_order, X.shape[0], batch_size)
@@ -223,7 +232,7 @@ def _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size):
         params, state = carry
         idx, kb = idx_k
         loss, grads = jax.value_and_grad(
-            lambda p: _batch_loss(eqx.combine(p, static), X[idx], Y[idx], W[idx], kb))(params)
+            lambda p: loss_fn(eqx.combine(p, static), X[idx], Y[idx], W[idx], kb))(params)
         updates, state = optimizer.update(grads, state, params)
         return (optax.apply_updates(params, updates), state), loss
     keys = jax.random.split(k_drop, order.shape[0])
@@ -234,6 +243,13 @@ def _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size):
 @eqx.filter_jit
 def _chunk_error(net, xb, yb, wb):
     return weighted_mse(_batched_apply(net, xb, wb, None), yb, wb)
+
+
+@eqx.filter_jit
+def _chunk_loss(net, xb, yb, wb, loss_fn):
+    """A custom batch loss as (sum, weight) so chunks average like :func:`_chunk_error`."""
+    c = jnp.sum(wb)
+    return loss_fn(net, xb, yb, wb, None) * c, c
 
 
 def bucket_length(n: int, minimum: int = 64) -> int:

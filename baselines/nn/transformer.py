@@ -25,6 +25,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from dam import InvalidParameterError, Interval
+
 from .base import NeuralSynthesizer
 from .train import predict_padded
 
@@ -121,6 +123,8 @@ class TransformerDecoder(NeuralSynthesizer):
     """
 
     name = "transformer"
+    _parameter_constraints = dict.fromkeys(["window", "n_layers", "n_heads", "d_model", "d_ff", "window_hop"],
+                                           [Interval(int, 1, None, closed="left")])
 
     def __init__(self, *, window: int = 15, n_layers: int = 4, n_heads: int = 8, d_model: int = 64,
                  d_ff: int = 128, window_hop: int = 5, dropout: float = 0.1, optimizer: str = "adam",
@@ -152,12 +156,10 @@ class TransformerDecoder(NeuralSynthesizer):
                 {"window": 5, "n_layers": 2, "n_heads": 2, "d_model": 8, "d_ff": 8, "max_epochs": 2,
                  "verbose": 0}]
 
-    def _check_network_params(self) -> None:
-        cls = type(self).__name__
-        self._check_positive_ints("window", "n_layers", "n_heads", "d_model", "d_ff", "window_hop")
+    def _check_param_relations(self) -> None:
         if self.d_model % self.n_heads:
-            raise ValueError(f"{cls}: parameter 'd_model' is {self.d_model}; must be a multiple of "
-                             f"n_heads={self.n_heads}")
+            raise InvalidParameterError(f"{type(self).__name__}: parameter 'd_model' is {self.d_model!r}; it must "
+                                        f"be a multiple of n_heads={self.n_heads}")
 
     def _network_spec(self, n_inputs, n_outputs):
         return WindowTransformer, dict(n_inputs=n_inputs, n_outputs=n_outputs,
@@ -172,7 +174,7 @@ class TransformerDecoder(NeuralSynthesizer):
 
     def _samples(self, encoder, utterance, y):
         from dam.corpus import window_targets
-        X = self._inputs(encoder, utterance.alignment, utterance.n_frames)
+        X = self._inputs(encoder, utterance, utterance.n_frames)
         Y = window_targets(y, ky=self.window, align="center").astype(np.float32)
         keep = slice(None, None, int(self.window_hop))
         return X[keep], Y[keep], np.ones(len(X[keep]), np.float32)

@@ -1,4 +1,4 @@
-"""``dam generate-vtl`` and ``dam vtl-lexicon``: make the bundled articulatory corpus again."""
+"""``dam generate-vtl``, ``dam vtl-lexicon`` and ``dam generate-tiny``: make the bundled corpora again."""
 from __future__ import annotations
 
 import argparse
@@ -75,4 +75,25 @@ def _cmd_vtl_lexicon(args) -> int:
     out = args.out or str(LEXICON_PATH)
     n = extract_articubench_lexicon(args.pkl, out)
     print(f"wrote {n} words to {out}")
+    return 0
+
+
+def add_generate_tiny(sub) -> None:
+    p = sub.add_parser("generate-tiny", help="write the tiny toy corpus (what the tests use)",
+                       description="Write the tiny corpus (30 utterances of a toy articulatory model, 4 channels, "
+                                   "100 Hz) to OUT_DIR. OUT_DIR is written as a whole: it must not exist or be "
+                                   "empty, unless --overwrite replaces it.",
+                       epilog="the bundled corpus: dam generate-tiny dam/datasets/data/tiny --overwrite")
+    p.add_argument("out_dir", metavar="OUT_DIR", help="directory to create (or replace, with --overwrite)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--overwrite", action="store_true", help="replace OUT_DIR if it exists and holds files")
+    p.set_defaults(func=_cmd_generate_tiny)
+
+
+def _cmd_generate_tiny(args) -> int:
+    from dam.corpus.atomic import check_output
+    from dam.datasets.tiny import write
+    check_output(args.out_dir, directory=True, overwrite=args.overwrite, option="OUT_DIR")
+    corpus = write(args.out_dir, overwrite=args.overwrite, seed=args.seed)
+    print(f"wrote {corpus!r} to {args.out_dir}")
     return 0

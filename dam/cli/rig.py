@@ -8,7 +8,6 @@ control, coordinates flattened ``x0, y0, x1, y1, ...``.
 from __future__ import annotations
 
 import argparse
-import sys
 
 from dam.cli.common import info
 
@@ -18,10 +17,26 @@ _MATRIX_NOTE = ("Matrix files: .npy, or .csv with comma-separated numbers and no
 
 def _save_matrix(arr, path) -> None:
     import numpy as np
+    from dam.corpus.atomic import atomic_write
     if str(path).endswith(".npy"):
-        np.save(path, np.asarray(arr, dtype=float))
+        with atomic_write(path, "wb") as fh:
+            np.save(fh, np.asarray(arr, dtype=float))
     else:
-        np.savetxt(path, np.atleast_2d(arr), delimiter=",", fmt="%.10g")
+        with atomic_write(path, "w") as fh:
+            np.savetxt(fh, np.atleast_2d(arr), delimiter=",", fmt="%.10g")
+
+
+def _check_outputs(args, corpora=(), matrices=(), files=()) -> None:
+    """Before any work: -o OUT_DIR and the matrix files written (``files``: option names)
+    are not inputs (the corpora and ``matrices`` options), not inside an input corpus,
+    and their directories exist; an OUT_DIR holding files needs --overwrite."""
+    from dam.corpus.atomic import check_output
+    inputs = list(corpora) + [getattr(args, m, None) for m in matrices]
+    if getattr(args, "output", None):
+        check_output(args.output, inputs=inputs, directory=True, overwrite=args.overwrite)
+    for opt in files:
+        if getattr(args, opt, None):
+            check_output(getattr(args, opt), inputs=inputs, option="--" + opt.replace("_", "-"))
 
 
 def _name_file(args, exc, fields: dict) -> None:
@@ -61,6 +76,7 @@ def _rig(args):
 def _add_io(p, what: str) -> None:
     p.add_argument("-o", "--output", metavar="OUT_DIR", help=f"corpus directory to write the {what} to")
     p.add_argument("--format", choices=("csv", "npy"), default="csv", help="trajectory files (default: csv)")
+    p.add_argument("--overwrite", action="store_true", help="replace OUT_DIR if it exists and holds files")
 
 
 def _add_outline_options(p) -> None:
@@ -86,9 +102,11 @@ def _load(args, spec):
 
 
 def _write(args, corpus, what: str) -> None:
+    from dam.corpus.atomic import atomic_directory
     from dam.corpus.io import save_corpus
     if args.output:
-        save_corpus(corpus, args.output, trajectory_format=args.format)
+        with atomic_directory(args.output, overwrite=args.overwrite) as tmp:  # whole or not at all
+            save_corpus(corpus, tmp, trajectory_format=args.format)
         info(args, f"wrote {what} {corpus!r} to {args.output}")
     else:
         info(args, f"{what} computed but not written: give -o OUT_DIR")
@@ -143,6 +161,8 @@ def cmd_crossmap(args) -> int:
     from dam.crossmap.rig import load_matrix
     if args.target_key_shapes is not None and args.rig_deltas is None:  # before the slow part
         raise DataError(None, "--rig-deltas", None, "--target-key-shapes needs the target's rig (--rig-deltas)")
+    _check_outputs(args, [args.captured], ("key_shapes", "target_key_shapes", "rig_deltas", "rig_neutral"),
+                   files=("save_key_shapes",))
     pref = args.preference
     if pref is not None and pref != "min":
         try:
@@ -192,7 +212,9 @@ def add_retarget(sub) -> None:
     p.add_argument("reference", metavar="REFERENCE", help="corpus whose principal modes define the poses")
     _add_io(p, "rig parameters")
     p.add_argument("--input", metavar="CORPUS", help="corpus to retarget (default: REFERENCE)")
-    p.add_argument("--n-modes", type=int, default=4, help="K, principal modes posed on the rig (default: 4)")
+    p.add_argument("--n-modes", type=_n_modes, default="auto",
+                   help="K, principal modes posed on the rig (default: auto, 4 or as many as the reference has "
+                        "dimensions if fewer)")
     p.add_argument("--sigma", type=float, default=3.0, help="poses at +/- this many standard deviations (default: 3)")
     p.add_argument("--save-poses", metavar="FILE", help="write the 2K reference poses for the artist")
     p.add_argument("--rig-poses", metavar="FILE", help="the artist's rig parameters for the 2K poses")
@@ -204,6 +226,15 @@ def add_retarget(sub) -> None:
     p.set_defaults(func=cmd_retarget)
 
 
+def _n_modes(text: str):
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--n-modes expects an integer or 'auto', got {text!r}") from None
+
+
 @_with_files(rig_poses="rig_poses", rig_neutral="rig_neutral", rig_names="rig_names")
 def cmd_retarget(args) -> int:
     from dam.corpus.data import DataError
@@ -211,6 +242,7 @@ def cmd_retarget(args) -> int:
     from dam.crossmap.rig import load_matrix
     if not args.sigma > 0:
         raise DataError(None, "--sigma", args.sigma, "must be a positive number of standard deviations")
+    _check_outputs(args, [args.reference, args.input], ("rig_poses", "rig_neutral"), files=("save_poses",))
     reference = _load(args, args.reference)
     if (args.rig_poses is None) != (args.rig_neutral is None):
         raise DataError(None, "--rig-poses" if args.rig_poses is None else "--rig-neutral", None,
@@ -222,10 +254,11 @@ def cmd_retarget(args) -> int:
         rig_names=_names(args.rig_names), bounds=None if args.bounds is None else tuple(args.bounds))
     rt.fit(reference)
     share = ", ".join(f"{100 * v:.1f}%" for v in rt.explained_variance_ratio_)
-    info(args, f"{args.n_modes} modes explain {100 * rt.explained_variance_ratio_.sum():.1f}% of the variance ({share})")
+    n_modes = rt.components_.shape[0]
+    info(args, f"{n_modes} modes explain {100 * rt.explained_variance_ratio_.sum():.1f}% of the variance ({share})")
     if args.save_poses:
         _save_matrix(rt.reference_poses(), args.save_poses)
-        info(args, f"wrote {2 * args.n_modes} reference poses to {args.save_poses}")
+        info(args, f"wrote {2 * n_modes} reference poses to {args.save_poses}")
     if args.rig_poses is not None:
         data = reference if args.input is None else _load(args, args.input)
         _write(args, rt.transform(data), "rig parameters")
@@ -265,6 +298,7 @@ def cmd_rigsolve(args) -> int:
     from dam.corpus.data import DataError
     from dam.crossmap.landmarks import LandmarkSolver
     from dam.crossmap.rig import load_matrix
+    _check_outputs(args, [args.landmarks], ("rig_deltas", "rig_neutral", "neutral"))
     pairs = None
     if args.symmetric:
         try:

@@ -6,18 +6,33 @@ names the source (file), the field and the offending value.
 Conventions
 -----------
 * Times are in seconds. Frame ``i`` of a trajectory is the sample at time
-  ``i / frame_rate``; an alignment ending at ``T`` covers
-  ``ceil(T * frame_rate)`` frames.
+  ``i / frame_rate``; an alignment ending at ``T`` covers the frames at
+  times ``<= T``: ``floor(T * frame_rate) + 1`` of them
+  (:meth:`Alignment.n_frames`). So an alignment of an ``n``-frame
+  trajectory ends at the last frame time ``(n - 1) / frame_rate`` or less
+  than one frame after it.
 * Silence: empty labels and ``sil``, ``sp``, ``spn``, ``pau`` (any case)
   become one canonical silence label (``SILENCE``, configurable per call).
-  A gap between two segments becomes a silence segment of its own; nothing
-  is merged or dropped.
+  A gap between two segments (or before the first) becomes silence, and
+  adjacent silence segments (from the file or from gap filling) are merged
+  into one (:class:`Alignment`).
+* Edges (:class:`Utterance`, where the frame rate is known; every loader
+  builds utterances through it, and writers write the alignment it keeps):
+  an alignment ending at, or within one frame of, the trajectory's last
+  frame time is kept as it is, with no padding. A shorter gap than one frame
+  or a longer overhang than the last frame time is absorbed into the last
+  segment (its end moves to the last frame time), never made a segment of
+  its own; a silence segment shorter than one frame anywhere is absorbed
+  into its neighbour. A longer gap at the end becomes (or extends) a
+  trailing silence; an alignment running more than two frames past the
+  last frame time is an error.
 """
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Sequence
+from typing import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -25,10 +40,15 @@ SILENCE = "sil"
 SILENCE_LABELS = frozenset({"", "sil", "sp", "spn", "pau", "<sil>", "silence"})
 # Times closer than this (seconds) count as equal: TextGrids store decimals.
 TIME_TOL = 1e-6
+# Bounds that catch misread units before anything is allocated (issue 12): an alignment
+# ending after a day, or a frame rate above 10 kHz (EMA runs at 100-1250 Hz, video at 24-240).
+MAX_DURATION = 86400.0
+MAX_FRAME_RATE = 10000.0
 
 __all__ = [
     "SILENCE", "SILENCE_LABELS", "DataError", "Alignment", "Utterance", "Corpus",
-    "frame_times", "frame_labels",
+    "frame_times", "frame_labels", "fill_masked", "infer_sensors", "resolve_sensors",
+    "fit_to_frames",
 ]
 
 
@@ -43,8 +63,38 @@ class DataError(ValueError):
         super().__init__(msg)
 
 
+def real_array(values, source, field_: str) -> np.ndarray:
+    """``values`` as a new float array; ragged, text and complex input is a DataError.
+
+    numpy would raise its own errors for ragged or object input, and silently drop the
+    imaginary part of complex input (with only a warning): neither names the file or field.
+    """
+    import warnings
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", _ComplexWarning)
+            raw = np.asarray(values)
+            if raw.dtype.kind == "c":
+                raise DataError(source, field_, str(raw.dtype), "complex values are not accepted",
+                                "store the real quantity you mean (e.g. np.abs or .real)")
+            if raw.dtype.kind not in "biufO":
+                raise TypeError(raw.dtype)
+            return np.array(raw, dtype=float, copy=True)
+    except DataError:
+        raise
+    except (TypeError, ValueError, OverflowError, _ComplexWarning) as exc:
+        kind = "out of range" if isinstance(exc, OverflowError) else "ragged, complex or not numbers"
+        shown = repr(values)
+        raise DataError(source, field_, shown if len(shown) <= 80 else shown[:77] + "...",
+                        f"must be an array of real numbers ({kind})") from None
+
+
+_ComplexWarning = getattr(getattr(np, "exceptions", np), "ComplexWarning")
+
+
 def _n_frames(duration: float, frame_rate: float) -> int:
-    return int(math.ceil(duration * frame_rate - 1e-6))
+    # frames at times <= duration (TIME_TOL: TextGrids store decimals)
+    return int(math.floor(duration * frame_rate + TIME_TOL * frame_rate)) + 1
 
 
 def canonical_label(label: str, silence: str = SILENCE) -> str:
@@ -72,6 +122,15 @@ class Alignment:
     ----------
     labels : tuple of str
     starts, ends : ndarray of float, shape (n_segments,)
+
+    Examples
+    --------
+    >>> import dam
+    >>> a = dam.Alignment(["sil", "a", "b", "sil"], [0.0, 0.1, 0.25, 0.4], [0.1, 0.25, 0.4, 0.5])
+    >>> len(a), a.duration
+    (4, 0.5)
+    >>> a.n_frames(100)
+    51
     """
 
     __slots__ = ("labels", "starts", "ends", "source", "silence")
@@ -79,8 +138,8 @@ class Alignment:
     def __init__(self, labels: Sequence[str], starts, ends, *, source: str | None = None,
                  silence: str = SILENCE):
         labels = [canonical_label(lab, silence) for lab in labels]
-        starts = np.array(starts, dtype=float).ravel()  # copies: snapped below, frozen after
-        ends = np.array(ends, dtype=float).ravel()
+        starts = real_array(starts, source, "starts").ravel()  # copies: snapped below, frozen after
+        ends = real_array(ends, source, "ends").ravel()
         if not (len(labels) == len(starts) == len(ends)):
             raise DataError(source, "segments", (len(labels), len(starts), len(ends)),
                             "labels, starts and ends differ in length")
@@ -92,6 +151,12 @@ class Alignment:
                 i = int(bad[0])
                 raise DataError(source, f"segment {i} ({labels[i]!r}) {name}", float(arr[i]),
                                 "time is not finite")
+            bad = np.flatnonzero(np.abs(arr) > MAX_DURATION)
+            if bad.size:
+                i = int(bad[0])
+                raise DataError(source, f"segment {i} ({labels[i]!r}) {name}", float(arr[i]),
+                                f"time is more than {MAX_DURATION:g} s (a day): a misread unit?",
+                                "split the recording into utterances")
         if starts[0] < -TIME_TOL:
             raise DataError(source, f"segment 0 ({labels[0]!r}) start", float(starts[0]),
                             "time is negative")
@@ -128,6 +193,8 @@ class Alignment:
             ends = np.insert(ends, gap, ins_e)
         # Snap near-equal boundaries so segments tile exactly.
         starts[1:] = np.where(np.abs(starts[1:] - ends[:-1]) <= TIME_TOL, ends[:-1], starts[1:])
+        # Adjacent silences are one pause.
+        labels, starts, ends = _merge_silences(labels, starts, ends, silence)
         starts[0] = max(starts[0], 0.0)
         self.labels = tuple(labels)
         self.starts = starts
@@ -166,7 +233,7 @@ class Alignment:
         return set(self.labels)
 
     def n_frames(self, frame_rate: float) -> int:
-        """Number of frames ``i`` with ``i / frame_rate < duration``."""
+        """Number of frames ``i`` with ``i / frame_rate <= duration`` (see the module's conventions)."""
         return _n_frames(self.duration, frame_rate)
 
     def shifted(self, seconds: float) -> "Alignment":
@@ -232,27 +299,45 @@ class Utterance:
         Path of a WAV file with the utterance's audio.
     name : str, optional
         Defaults to the alignment's source file stem.
+    mask : array-like of bool, shape (n_frames, n_channels), optional
+        Missing data: False where the value was not observed (a sensor
+        dropout). Default None: everything observed. The stored trajectory
+        is always finite: masked values (whatever was passed, NaN included)
+        are replaced by linear interpolation over time between the channel's
+        observed values (:func:`fill_masked`). Scoring ignores them; see
+        ``Synthesizer.fit`` for how models treat them.
+
+    Examples
+    --------
+    >>> import numpy as np, dam
+    >>> a = dam.Alignment(["sil", "a", "sil"], [0.0, 0.1, 0.3], [0.1, 0.3, 0.4])
+    >>> u = dam.Utterance(a, np.zeros((41, 2)), 100.0, ["jaw", "lip"], name="u1")
+    >>> u.trajectory.shape, u.channels
+    ((41, 2), ('jaw', 'lip'))
     """
 
-    __slots__ = ("alignment", "trajectory", "frame_rate", "channels", "audio", "name")
+    __slots__ = ("alignment", "trajectory", "frame_rate", "channels", "audio", "name", "mask")
 
     def __init__(self, alignment: Alignment, trajectory, frame_rate: float,
                  channels: Sequence[str], *, audio: str | None = None, name: str | None = None,
-                 source: str | None = None):
-        source = source or alignment.source
+                 source: str | None = None, mask=None):
         if not isinstance(alignment, Alignment):
             raise TypeError(f"{source or '<input>'}: alignment must be an Alignment, got {type(alignment).__name__}")
+        source = source or alignment.source
         try:
             fr = float(frame_rate)
         except (TypeError, ValueError):
             raise DataError(source, "frame_rate", frame_rate, "not a number") from None
-        if not (math.isfinite(fr) and fr > 0):
-            raise DataError(source, "frame_rate", frame_rate, "must be a positive finite number")
-        traj = np.array(trajectory, dtype=float, copy=True)
+        if not (math.isfinite(fr) and 0 < fr <= MAX_FRAME_RATE):
+            raise DataError(source, "frame_rate", frame_rate,
+                            f"must be a positive finite number of at most {MAX_FRAME_RATE:g} frames/s")
+        traj = real_array(trajectory, source, "trajectory")
         if traj.ndim == 1:
             traj = traj[:, None]
         if traj.ndim != 2:
             raise DataError(source, "trajectory", traj.shape, "must be 2-D (n_frames, n_channels)")
+        if isinstance(channels, (str, bytes)) or not hasattr(channels, "__iter__"):
+            raise DataError(source, "channels", channels, "must be a sequence of channel names")
         channels = tuple(str(c) for c in channels)
         if len(channels) != traj.shape[1]:
             raise DataError(source, "channels", len(channels),
@@ -260,7 +345,12 @@ class Utterance:
         if len(set(channels)) != len(channels):
             dup = next(c for c in channels if channels.count(c) > 1)
             raise DataError(source, "channels", dup, "duplicate channel name")
-        bad = np.argwhere(~np.isfinite(traj))
+        if mask is not None:
+            mask = real_array(mask, source, "mask") != 0
+            if mask.shape != traj.shape:
+                raise DataError(source, "mask", mask.shape, f"must have the trajectory's shape {traj.shape}")
+            mask = None if mask.all() else mask
+        bad = np.argwhere(~np.isfinite(traj) & (True if mask is None else mask))
         if bad.size:
             i, j = (int(v) for v in bad[0])
             raise DataError(source, f"trajectory[{i}, {channels[j]!r}] (frame {i}, t={i / fr:.3f} s)",
@@ -269,14 +359,12 @@ class Utterance:
         n = traj.shape[0]
         if n == 0:
             raise DataError(source, "trajectory", traj.shape, "the trajectory has no frames")
-        need = alignment.n_frames(fr)
-        if n < need - 1:
-            raise DataError(source, "trajectory", f"{n} frames",
-                            f"shorter than its alignment, which needs {need} frames "
-                            f"({alignment.duration:.3f} s at {fr:g} frames/s)")
-        if n != need:
-            alignment = alignment.with_end(n / fr)
+        alignment = fit_to_frames(alignment, n, fr, source)
+        if mask is not None:
+            traj = fill_masked(traj, mask)
+            mask.setflags(write=False)
         traj.setflags(write=False)
+        self.mask = mask
         self.alignment = alignment
         self.trajectory = traj
         self.frame_rate = fr
@@ -303,11 +391,113 @@ class Utterance:
     def replace(self, **changes) -> "Utterance":
         """A copy with some fields replaced (``alignment``, ``trajectory``, ...)."""
         kw = dict(alignment=self.alignment, trajectory=self.trajectory, frame_rate=self.frame_rate,
-                  channels=self.channels, audio=self.audio, name=self.name)
+                  channels=self.channels, audio=self.audio, name=self.name, mask=self.mask)
+        if "mask" not in changes and self.mask is not None and \
+                np.shape(changes.get("trajectory", self.trajectory)) != self.mask.shape:
+            kw["mask"] = None  # a trajectory of another shape: the old mask cannot describe it
         kw.update(changes)
         alignment, trajectory, fr, channels = (kw.pop(k) for k in ("alignment", "trajectory",
                                                                    "frame_rate", "channels"))
         return Utterance(alignment, trajectory, fr, channels, **kw)
+
+
+def _merge_silences(labels, starts, ends, silence):
+    """Adjacent ``silence`` segments merged into one (labels list, starts, ends arrays)."""
+    sil = np.array([lab == silence for lab in labels])
+    if len(labels) < 2 or not np.any(sil[1:] & sil[:-1]):
+        return labels, starts, ends
+    keep = ~np.r_[False, sil[1:] & sil[:-1]]          # first of every run of silences
+    last = np.r_[~(sil[1:] & sil[:-1]), True]         # last of every run
+    return ([lab for lab, k in zip(labels, keep) if k], starts[keep], ends[last])
+
+
+def fit_to_frames(alignment: Alignment, n_frames: int, frame_rate: float, source=None) -> Alignment:
+    """The alignment an utterance of ``n_frames`` frames keeps: the edge convention.
+
+    See the module's conventions: silence segments shorter than one frame
+    are absorbed into their neighbour; an end within one frame of the last
+    frame time ``(n_frames - 1) / frame_rate`` is kept; a shorter gap or any
+    overhang (up to two frames) moves the last segment's end to the last
+    frame time; a longer gap becomes trailing silence. Afterwards
+    ``alignment.n_frames(frame_rate) == n_frames``.
+
+    Raises
+    ------
+    DataError
+        If the alignment runs more than two frames past the last frame time.
+
+    Examples
+    --------
+    >>> a = Alignment(["sil", "a", "sil"], [0.0, 0.1, 0.2], [0.1, 0.2, 0.29])
+    >>> fit_to_frames(a, 30, 100.0) is a        # ends at the last frame time
+    True
+    >>> float(fit_to_frames(a, 40, 100.0).ends[-1])    # the pause grows to the last frame
+    0.39
+    """
+    a = alignment
+    source = source or a.source
+    last = (n_frames - 1) / frame_rate
+    frame = 1.0 / frame_rate
+    if a.duration > last + 2 * frame + TIME_TOL:
+        raise DataError(source, "trajectory", f"{n_frames} frames",
+                        f"shorter than its alignment, which needs {a.n_frames(frame_rate)} frames "
+                        f"({a.duration:.3f} s at {frame_rate:g} frames/s)")
+    labels, starts, ends = list(a.labels), a.starts.copy(), a.ends.copy()
+    short = [j for j, lab in enumerate(labels)
+             if lab == a.silence and ends[j] - starts[j] < frame - TIME_TOL and len(labels) > 1]
+    for j in reversed(short):          # into the previous segment (the next one for the first)
+        if j > 0:
+            ends[j - 1] = ends[j]
+        else:
+            starts[1] = starts[0]
+        del labels[j]
+        starts, ends = np.delete(starts, j), np.delete(ends, j)
+    end = ends[-1]
+    if end >= last + frame - TIME_TOL:                 # overhang: trim to the last frame time
+        keep = starts < last - TIME_TOL
+        if not keep.any():
+            raise DataError(source, "trajectory", f"{n_frames} frames",
+                            f"the alignment starts after the last frame ({last:.3f} s)")
+        labels = [lab for lab, k in zip(labels, keep) if k]
+        starts, ends = starts[keep], ends[keep]
+        ends[-1] = last
+    elif end < last - frame + TIME_TOL:                # a real pause: trailing silence
+        labels.append(a.silence)
+        starts, ends = np.append(starts, end), np.append(ends, last)
+    elif end < last - TIME_TOL:                        # a sub-frame gap: absorbed
+        ends[-1] = last
+    if not short and len(labels) == len(a) and np.array_equal(ends, a.ends):
+        return a
+    return Alignment(labels, starts, ends, source=a.source, silence=a.silence)
+
+
+def fill_masked(trajectory, mask) -> np.ndarray:
+    """``trajectory`` with its masked values replaced by interpolation over time.
+
+    Parameters
+    ----------
+    trajectory : ndarray, shape (n_frames, n_channels)
+    mask : ndarray of bool, same shape
+        True where observed.
+
+    Returns
+    -------
+    ndarray, same shape
+        Per channel, unobserved frames get the linear interpolation between
+        the nearest observed frames (the nearest observed value before the
+        first or after the last one); a channel with no observed frame is 0.
+
+    Examples
+    --------
+    >>> fill_masked(np.array([[1.0], [99.0], [3.0]]), np.array([[True], [False], [True]])).ravel().tolist()
+    [1.0, 2.0, 3.0]
+    """
+    out = np.array(trajectory, dtype=float, copy=True)
+    frames = np.arange(out.shape[0])
+    for j in np.flatnonzero(~mask.all(axis=0)):
+        ok = mask[:, j]
+        out[~ok, j] = np.interp(frames[~ok], frames[ok], out[ok, j]) if ok.any() else 0.0
+    return out
 
 
 def _stem(path: str) -> str:
@@ -327,6 +517,16 @@ class Corpus:
         Anything else (kept from ``corpus.json``).
     source : str, optional
         Directory the corpus was read from; used in error messages.
+
+    Examples
+    --------
+    >>> import dam
+    >>> corpus = dam.datasets.load("tiny")
+    >>> train, test = corpus.train_test_split(0.25, random_state=0)
+    >>> len(train) + len(test) == len(corpus)
+    True
+    >>> corpus.frame_rate, len(corpus.channels)
+    (100.0, 4)
     """
 
     def __init__(self, utterances: Iterable[Utterance], *, name: str | None = None,
@@ -399,6 +599,17 @@ class Corpus:
         return [u.trajectory for u in self.utterances]
 
     @property
+    def masks(self) -> list:
+        """Each utterance's missing-data mask (None where all is observed)."""
+        return [u.mask for u in self.utterances]
+
+    @property
+    def sensors(self) -> dict[str, tuple[str, ...]]:
+        """Sensor name -> its x/y(/z) channels: ``metadata["sensors"]`` (from ``corpus.json``)
+        if given, else inferred from the channel names (:func:`infer_sensors`)."""
+        return resolve_sensors(self.channels, self.metadata.get("sensors"), source=self.source)
+
+    @property
     def phones(self) -> set[str]:
         out: set[str] = set()
         for u in self.utterances:
@@ -426,8 +637,12 @@ class Corpus:
                             "not channels of this corpus" if missing else "no channels selected",
                             f"its channels are {names}")
         cols = [names.index(c) for c in channels]
-        return Corpus([u.replace(trajectory=u.trajectory[:, cols], channels=list(channels)) for u in self],
-                      name=self.name, metadata=self.metadata, source=self.source)
+        meta = dict(self.metadata)
+        if isinstance(meta.get("sensors"), dict):  # keep the sensors whose channels all remain
+            meta["sensors"] = {k: v for k, v in meta["sensors"].items() if set(v) <= set(channels)}
+        return Corpus([u.replace(trajectory=u.trajectory[:, cols], channels=list(channels),
+                                 mask=None if u.mask is None else u.mask[:, cols]) for u in self],
+                      name=self.name, metadata=meta, source=self.source)
 
     # -- splitting ---------------------------------------------------------
     def subset(self, indices) -> "Corpus":
@@ -455,3 +670,99 @@ class Corpus:
         for test in np.array_split(order, n_splits):
             test_set = set(test.tolist())
             yield self.subset([i for i in range(n) if i not in test_set]), self.subset(sorted(test_set))
+
+
+# -- sensors ------------------------------------------------------------------
+# EMA and X-ray microbeam corpora record each sensor (coil, pellet) as 2 or 3 position
+# channels; Corpus.sensors groups them for the per-sensor error of Medina et al. (2022, Eq. 1).
+_SEPARATED = re.compile(r"^(?P<sensor>.+?)_p?(?P<axis>[xyzXYZ])$")
+_UPPER = re.compile(r"^(?P<sensor>[A-Z][A-Z0-9]*?)(?P<axis>[XYZ])$")
+
+
+def _split(name: str) -> tuple[str, str] | None:
+    m = _SEPARATED.match(name) or _UPPER.match(name)
+    if not m:
+        return None
+    return m.group("sensor"), m.group("axis").lower()
+
+
+def infer_sensors(channels: Sequence[str]) -> dict[str, tuple[str, ...]]:
+    """Group position channels into sensors by their names.
+
+    Recognised names: ``<sensor>_<axis>`` with axis ``x``, ``y`` or ``z``
+    (MOCHA-TIMIT ``tt_x``, X-ray microbeam ``T1_x``); ``<sensor>_p<axis>``, a
+    position channel (mngu0 ``T1_py``, Haskins/mview ``TT_px``; orientation
+    channels ``_ox`` ... are no positions); an upper-case ``<SENSOR><AXIS>``
+    (VocalTractLab ``TTX``, ``TTY``). A group needs two or three distinct
+    axes; a lone ``JX`` beside ``JA`` is no sensor. ``corpus.json`` can name
+    the sensors instead: ``{"sensors": {"TT": ["tt_x", "tt_y"]}}``.
+
+    Parameters
+    ----------
+    channels : sequence of str
+        Channel names, in corpus order.
+
+    Returns
+    -------
+    dict of str to tuple of str
+        Sensor name -> its channels ordered x, y, z; sensors in the order of
+        their first channel. Channels that fit no pattern belong to no sensor.
+
+    Examples
+    --------
+    >>> infer_sensors(["tt_x", "tt_y", "T1_px", "T1_pz", "T1_ox", "JX", "JA"])
+    {'tt': ('tt_x', 'tt_y'), 'T1': ('T1_px', 'T1_pz')}
+    """
+    groups: dict[str, dict[str, str]] = {}
+    for name in channels:
+        parts = _split(str(name))
+        if parts is None:
+            continue
+        sensor, axis = parts
+        axes = groups.setdefault(sensor, {})
+        if axis in axes:  # two channels claim one axis: the names do not describe a sensor
+            axes["?"] = name
+        else:
+            axes[axis] = name
+    return {s: tuple(axes[a] for a in "xyz" if a in axes) for s, axes in groups.items()
+            if "?" not in axes and len(axes) >= 2}
+
+
+def resolve_sensors(channels: Sequence[str], given: Mapping | None = None, *,
+                    source: str | None = None) -> dict[str, tuple[str, ...]]:
+    """The sensors of a corpus: ``given`` (from ``corpus.json``) if any, else inferred.
+
+    Parameters
+    ----------
+    channels : sequence of str
+    given : mapping of str to sequence of str, optional
+        Sensor name -> its 2 or 3 channel names.
+    source : str, optional
+        Named in errors (the corpus directory).
+
+    Raises
+    ------
+    DataError
+        A given sensor names a channel the corpus does not have, has fewer
+        than two or more than three channels, or shares a channel with another.
+    """
+    if given is None:
+        return infer_sensors(channels)
+    if not isinstance(given, Mapping):
+        raise DataError(source, "sensors", type(given).__name__,
+                        'must map sensor names to lists of channels, e.g. {"TT": ["tt_x", "tt_y"]}')
+    names = set(channels)
+    seen: dict[str, str] = {}
+    out: dict[str, tuple[str, ...]] = {}
+    for sensor, chans in given.items():
+        if isinstance(chans, str) or not isinstance(chans, Sequence) or not 2 <= len(chans) <= 3:
+            raise DataError(source, f"sensors[{sensor!r}]", chans, "a sensor is a list of 2 or 3 channels")
+        for c in chans:
+            if c not in names:
+                raise DataError(source, f"sensors[{sensor!r}]", c, "not a channel of this corpus",
+                                f"its channels are {list(channels)}")
+            if c in seen:
+                raise DataError(source, f"sensors[{sensor!r}]", c, f"already a channel of sensor {seen[c]!r}")
+            seen[c] = sensor
+        out[str(sensor)] = tuple(str(c) for c in chans)
+    return out

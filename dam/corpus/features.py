@@ -49,7 +49,8 @@ Feature sets (``features``)
     phone set has 40 entries and 2341 features.
 
 ``dilation`` spaces the window frames ``dilation`` frames apart: the paper's
-11 frames at 29.97 frames/s span 0.37 s, which at 100 Hz takes dilation 3.
+11 frames at 29.97 frames/s span 0.37 s, which at 100 Hz takes dilation 3
+(:func:`window_dilation` turns a window frame rate into a dilation).
 """
 from __future__ import annotations
 
@@ -59,7 +60,7 @@ from dam.corpus.data import SILENCE, Alignment, DataError
 
 __all__ = [
     "phone_vocabulary", "frame_phone_indices", "window_features", "window_targets", "overlap_average",
-    "window_offsets", "n_window_features", "window_feature_names", "phonetic_transition_clusters",
+    "window_offsets", "window_dilation", "n_window_features", "window_feature_names", "phonetic_transition_clusters",
     "fit_transition_clusters",
 ]
 
@@ -133,6 +134,36 @@ def window_offsets(k: int, align: str = "center", dilation: int = 1) -> np.ndarr
     k = int(k)
     start = -(k // 2) if align == "center" else -(k - 1)
     return np.arange(start, start + k) * int(dilation)
+
+
+def window_dilation(frame_rate: float, window_rate: float | None = 30.0) -> int:
+    """Frames between window frames so that windows step at ``window_rate`` Hz: ``round(frame_rate / window_rate)``.
+
+    Parameters
+    ----------
+    frame_rate : float
+        Rate of the data (Hz).
+    window_rate : float or None, default 30.0
+        Rate of the window frames; Taylor et al.'s video ran at 29.97 Hz, so
+        ``kx = 11`` frames spanned 0.37 s. None: every data frame (dilation 1).
+
+    Returns
+    -------
+    int, at least 1
+
+    Examples
+    --------
+    >>> from dam.corpus import window_dilation
+    >>> window_dilation(100.0), window_dilation(29.97), window_dilation(100.0, None)
+    (3, 1, 1)
+    >>> 11 * window_dilation(100.0) / 100.0  # seconds spanned by 11 window frames (the paper's: 11 / 29.97 = 0.37)
+    0.33
+    """
+    if window_rate is None:
+        return 1
+    if not (window_rate > 0 and np.isfinite(window_rate)):
+        raise ValueError(f"window_rate must be positive or None, got {window_rate!r}")
+    return max(1, int(round(float(frame_rate) / float(window_rate))))
 
 
 def _windows(idx: np.ndarray, kx: int, align: str, pad: int, dilation: int = 1) -> np.ndarray:

@@ -1,8 +1,8 @@
 """Landmark-to-rig solve (Medina et al. 2022, Section 7, Eqs. 2-4).
 
-Per frame ``t`` the rig parameters ``theta_t`` minimise
+Per frame ``t`` the rig parameters ``theta_t`` minimise (Eqs. 2-4)::
 
-    e(theta) = sum_l ||C(theta)_l - y_l||^2  +  alpha * sum_p |theta_p|      (Eqs. 2-4)
+    e(theta) = sum_l ||C(theta)_l - y_l||^2  +  alpha * sum_p |theta_p|
 
 where ``C(theta)_l`` is the ``l``-th landmark of the posed rig and ``y_l`` its
 target, ``C(theta_N)_l + delta_l`` with ``delta_l = A(v_l - v_N,l)`` the

@@ -47,7 +47,7 @@ __all__ = ["principal_modes", "project", "retargeting_poses", "retarget_weights"
            "rig_space_retarget", "RigSpaceRetargeter"]
 
 
-def principal_modes(frames, n_modes: int):
+def principal_modes(frames, n_modes, *, source: str | None = None):
     """Mean, first ``n_modes`` principal modes and their eigenvalues.
 
     Parameters
@@ -67,16 +67,18 @@ def principal_modes(frames, n_modes: int):
     """
     from sklearn.decomposition import PCA
 
-    X = check_frames(frames, "frames")
+    X = check_frames(frames, "frames", source=source)
     k_max = min(len(X) - 1, X.shape[1])
+    if isinstance(n_modes, str) and n_modes == "auto":  # as many as fit, at most the paper's 4
+        n_modes = max(1, min(4, k_max))
     if not (isinstance(n_modes, (int, np.integer)) and 1 <= n_modes <= k_max):
-        raise DataError(None, "n_modes", n_modes, f"must be an integer in [1, {k_max}] for "
-                        f"{len(X)} frames of {X.shape[1]} dims")
+        raise DataError(source, "n_modes", n_modes, f"must be an integer in [1, {k_max}] for "
+                        f"{len(X)} frames of {X.shape[1]} dims", "or 'auto'")
     pca = PCA(n_components=int(n_modes), svd_solver="full").fit(X)
     lam = pca.explained_variance_
     if np.any(lam <= 1e-12 * max(lam[0], 1e-300)):
         k = int(np.flatnonzero(lam <= 1e-12 * max(lam[0], 1e-300))[0])
-        raise DataError(None, "n_modes", n_modes, f"mode {k + 1} has no variance in the reference "
+        raise DataError(source, "n_modes", n_modes, f"mode {k + 1} has no variance in the reference "
                         "trajectories; use fewer modes")
     return pca.mean_.copy(), pca.components_.copy(), lam.copy()
 
@@ -169,7 +171,8 @@ class RigSpaceRetargeter(BaseEstimator, TransformerMixin):
 
     Parameters
     ----------
-    n_modes : int, default 4
+    n_modes : int or "auto", default 4
+        ("auto": 4, or fewer when the reference has fewer dimensions)
         ``K``, the number of principal modes posed on the rig (the paper's 4).
     u : pair of float, default (-3, 3)
         The standard-deviation steps of the poses.
@@ -207,7 +210,8 @@ class RigSpaceRetargeter(BaseEstimator, TransformerMixin):
     def fit(self, X, y=None) -> "RigSpaceRetargeter":
         """Principal modes of the reference trajectories (array, Utterance, Corpus or list)."""
         frames = stack_frames(X, "X")
-        self.mean_, self.components_, self.eigenvalues_ = principal_modes(frames, self.n_modes)
+        source = getattr(X, "source", None) or getattr(X, "name", None) or "reference trajectories"
+        self.mean_, self.components_, self.eigenvalues_ = principal_modes(frames, self.n_modes, source=source)
         total = np.sum(np.var(frames, axis=0, ddof=1))
         self.explained_variance_ratio_ = self.eigenvalues_ / total
         self.n_dims_ = frames.shape[1]

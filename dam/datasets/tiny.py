@@ -9,10 +9,11 @@ in seconds; see ``vtl`` for the real reference corpus.
 
 Regenerate (identical for the same seed)::
 
-    python -m dam.datasets.tiny dam/datasets/data/tiny
+    dam generate-tiny dam/datasets/data/tiny --overwrite
 """
 from __future__ import annotations
 
+import os
 import sys
 
 import numpy as np
@@ -95,22 +96,63 @@ def generate(n_utterances=30, seed=0, noise=0.005) -> Corpus:
         y = render(a.labels, a.starts, a.ends)
         y = y + noise * rng.standard_normal(y.shape)
         utts.append(Utterance(a, np.round(y, 5), FRAME_RATE, CHANNELS, name=f"tiny{k:03d}"))
-    return Corpus(utts, name="tiny", metadata={"generator": "dam.datasets.tiny", "seed": seed})
+    return Corpus(utts, name="tiny", metadata={"generator": "dam.datasets.tiny", "seed": seed,
+                                               "units": dict.fromkeys(CHANNELS, "a.u.")})  # toy, arbitrary units
 
 
-def main(argv=None):
+def write(directory, *, overwrite: bool = False, seed: int = 0) -> Corpus:
+    """Write the tiny corpus to ``directory`` as a whole (:func:`dam.corpus.atomic.atomic_directory`).
+
+    Parameters
+    ----------
+    directory : path-like
+        Must not exist, or be empty; with ``overwrite=True`` an existing
+        directory is replaced (never merged with what it held).
+    overwrite : bool, default False
+    seed : int, default 0
+
+    Returns
+    -------
+    Corpus
+        The corpus written.
+
+    Raises
+    ------
+    dam.corpus.atomic.OutputPathError
+        ``directory`` holds files and ``overwrite`` is False: nothing is written.
+    """
+    from dam.corpus.atomic import atomic_directory, atomic_write
     from dam.corpus.io import save_corpus
-    out = (argv or sys.argv[1:] or ["dam/datasets/data/tiny"])[0]
-    corpus = generate()
-    save_corpus(corpus, out, decimals=5)
-    # Pauses as empty intervals, as MFA writes them.
-    import glob
-    import os
-    for path in glob.glob(os.path.join(out, "*.TextGrid")):
-        txt = open(path, encoding="utf-8").read().replace(f'text = "{SILENCE}"', 'text = ""')
-        open(path, "w", encoding="utf-8").write(txt)
-    print(f"wrote {corpus!r} to {out}")
+    corpus = generate(seed=seed)
+    with atomic_directory(directory, overwrite=overwrite) as tmp:
+        save_corpus(corpus, tmp, decimals=5)
+        # Pauses as empty intervals, as MFA writes them.
+        for name in sorted(os.listdir(tmp)):
+            if name.endswith(".TextGrid"):
+                path = os.path.join(tmp, name)
+                with open(path, encoding="utf-8") as fh:
+                    txt = fh.read().replace(f'text = "{SILENCE}"', 'text = ""')
+                with atomic_write(path) as fh:
+                    fh.write(txt)
+    return corpus
+
+
+def main(argv=None) -> int:
+    """``python -m dam.datasets.tiny DIR [--overwrite]`` (also ``dam generate-tiny``)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    overwrite = "--overwrite" in args
+    rest = [a for a in args if a != "--overwrite"]
+    if len(rest) != 1 or rest[0].startswith("-"):
+        print("usage: python -m dam.datasets.tiny DIR [--overwrite]", file=sys.stderr)
+        return 2
+    try:
+        corpus = write(rest[0], overwrite=overwrite)
+    except ValueError as exc:  # DataError / OutputPathError: one line, no traceback
+        print(f"dam: error: {exc}", file=sys.stderr)
+        return 1
+    print(f"wrote {corpus!r} to {rest[0]}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

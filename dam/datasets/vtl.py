@@ -53,20 +53,26 @@ from typing import Sequence
 
 import numpy as np
 
+from dam.corpus.atomic import atomic_write
 from dam.corpus.data import Alignment, Corpus, DataError, Utterance
 
 __all__ = [
-    "VTL_CHANNELS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",
+    "VTL_CHANNELS", "VTL_UNITS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",
     "Word", "PhrasePlan", "load_lexicon", "extract_articubench_lexicon", "map_phones",
     "import_vtl", "check_vtl_symbols", "probe_vtl_symbol", "split_words", "plan_phrases", "plan_corpus",
     "segment_file_text",
     "read_tract_sequence", "resample_tract", "synthesize_phrase", "generate_vtl_corpus",
-    "add_generate_vtl", "main",
 ]
 
 #: The 19 tract parameters of VTL's vocal tract model, in VTL's order.
 VTL_CHANNELS = ("HX", "HY", "JX", "JA", "LP", "LD", "VS", "VO", "TCX", "TCY",
                 "TTX", "TTY", "TBX", "TBY", "TRX", "TRY", "TS1", "TS2", "TS3")
+
+#: Units of the tract parameters, as VTL's own parameter table gives them
+#: (``vocaltractlab_cython.get_param_info("tract")``; VS, the velum shape, has none).
+VTL_UNITS = {"HX": "cm", "HY": "cm", "JX": "cm", "JA": "deg", "LP": "cm", "LD": "cm", "VS": "", "VO": "cm²",
+             "TCX": "cm", "TCY": "cm", "TTX": "cm", "TTY": "cm", "TBX": "cm", "TBY": "cm", "TRX": "cm",
+             "TRY": "cm", "TS1": "cm", "TS2": "cm", "TS3": "cm"}
 
 #: VTL's audio rate and the audio samples per tract state: states come at 44100/110 = 400.9 Hz.
 VTL_AUDIO_RATE = 44100
@@ -170,7 +176,7 @@ def extract_articubench_lexicon(pkl_path, out_path=LEXICON_PATH) -> int:
     text = "word\tphones\tdurations_s\n" + "".join(rows)
     out_path = Path(out_path)
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    with open(out_path, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz:
+    with atomic_write(out_path, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz:
         gz.write(text.encode("utf-8"))
     return len(rows)
 
@@ -240,7 +246,7 @@ def probe_vtl_symbol(symbol: str, workdir=None) -> bool:
         plan = PhrasePlan("probe", (), ("", "a", sym, "a", ""), (0.1, 0.12, 0.1, 0.12, 0.1), (), 1.0, False)
         with tempfile.TemporaryDirectory(dir=workdir) as tmp:
             seg, ges = os.path.join(tmp, "p.seg"), os.path.join(tmp, "p.ges")
-            with open(seg, "w", encoding="utf-8") as fh:
+            with open(seg, "w", encoding="utf-8") as fh:  # scratch input for VTL, not an output
                 fh.write(segment_file_text(plan))
             vtl.phoneme_file_to_gesture_file(seg, ges)
             with open(ges, encoding="utf-8") as fh:
@@ -445,7 +451,7 @@ def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate
     alignment = Alignment(plan.labels, ends - np.asarray(plan.durations), ends, source=plan.name)
     with tempfile.TemporaryDirectory(prefix="dam_vtl_", dir=workdir) as tmp:
         seg, ges, trk = (os.path.join(tmp, f"{plan.name}.{ext}") for ext in ("seg", "ges", "tract"))
-        with open(seg, "w", encoding="utf-8") as fh:
+        with open(seg, "w", encoding="utf-8") as fh:  # scratch input for VTL, not an output
             fh.write(segment_file_text(plan))
         vtl.phoneme_file_to_gesture_file(seg, ges)
         vtl.gesture_file_to_motor_file(ges, trk)
@@ -490,13 +496,14 @@ def _write_split(results: list[dict], plans: list[PhrasePlan], directory: Path, 
         audio = None
         if res["audio"] is not None:
             audio = str(directory / f"{stem}.wav")
-            wavfile.write(audio, audio_rate, res["audio"])
+            with atomic_write(audio, "wb") as fh:
+                wavfile.write(fh, audio_rate, res["audio"])
         utts.append(Utterance(res["alignment"], traj, frame_rate, VTL_CHANNELS, audio=audio, name=stem))
-    meta = {"frame_rate": frame_rate, "channels": list(VTL_CHANNELS), **metadata,
+    meta = {"frame_rate": frame_rate, "channels": list(VTL_CHANNELS), "units": dict(VTL_UNITS), **metadata,
             "utterances": {p.name: {"words": list(p.words), "rate": p.rate, "audio": p.audio}
                            for p in plans}}
-    (directory / "corpus.json").write_text(json.dumps(meta, indent=1, ensure_ascii=False) + "\n",
-                                           encoding="utf-8")
+    with atomic_write(directory / "corpus.json", "w", encoding="utf-8") as fh:
+        fh.write(json.dumps(meta, indent=1, ensure_ascii=False) + "\n")
     return Corpus(utts, name=metadata.get("name"), metadata=meta, source=str(directory))
 
 
@@ -623,3 +630,186 @@ def _package_version() -> str:
         return version("vocaltractlab-cython")
     except PackageNotFoundError:
         return "unknown"
+
+
+# -- audio for an existing corpus (issue 15) ----------------------------------
+#: Audio files of the bundled corpus: FLAC (lossless, about half the bytes of 16-bit WAV).
+AUDIO_SUFFIX = ".flac"
+
+
+def audio_priority(n: int, first=()) -> list[int]:
+    """The order in which the ``n`` phrases of a split get audio.
+
+    ``first`` (phrases that already have audio) come first, then the rest in
+    bit-reversal (van der Corput) order of their index: any prefix of the
+    order is spread evenly over the split, and a larger share always contains
+    a smaller one, so audio generated under a CPU budget and audio generated
+    later add up to the same set.
+
+    Parameters
+    ----------
+    n : int
+        Number of phrases.
+    first : iterable of int
+        Indices to put first, in the given order.
+
+    Returns
+    -------
+    list of int
+        A permutation of ``range(n)``.
+
+    Examples
+    --------
+    >>> audio_priority(8)
+    [0, 4, 2, 6, 1, 5, 3, 7]
+    """
+    bits = max(1, (n - 1).bit_length())
+    rev = sorted(range(1 << bits), key=lambda i: int(format(i, f"0{bits}b")[::-1], 2))
+    head = [i for i in dict.fromkeys(int(k) for k in first) if 0 <= i < n]
+    seen = set(head)
+    return head + [i for i in rev if i < n and i not in seen]
+
+
+def synthesize_audio(plan: PhrasePlan, *, audio_rate: int = 16000, frame_rate: float = 100.0,
+                     workdir=None) -> dict:
+    """VTL audio of one phrase (deterministic: a pure function of the plan).
+
+    Returns :func:`synthesize_phrase`'s dict (its ``trajectory`` too, so the
+    caller can prove the phrase is the one on disk).
+    """
+    return synthesize_phrase(replace(plan, audio=True), frame_rate=frame_rate, audio_rate=audio_rate,
+                             workdir=workdir)
+
+
+def write_flac(path, samples: np.ndarray, audio_rate: int) -> None:
+    """Write int16 ``samples`` as 16-bit FLAC, atomically (needs soundfile, the ``audio`` extra)."""
+    try:
+        import soundfile
+    except ImportError as exc:  # pragma: no cover - depends on the install
+        raise ImportError('writing FLAC needs soundfile: pip install "dam[audio]"') from exc
+    with atomic_write(path, "wb") as fh:
+        soundfile.write(fh, np.asarray(samples, np.int16), int(audio_rate), format="FLAC", subtype="PCM_16")
+
+
+def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None = None,
+                  deadline: float | None = None, audio_rate: int = 16000, verbose: int = 1,
+                  lexicon=None, mapping: dict | None = None) -> dict:
+    """Give (more of) a generated vtl corpus its audio, in place; cached and resumable.
+
+    The phrases are planned again from the seed in ``corpus.json`` (the plans
+    do not depend on the audio share), checked against the words on disk,
+    and synthesized with audio in :func:`audio_priority` order until
+    ``fraction`` of every split has a ``<stem>.flac``. Each phrase's
+    trajectory is synthesized again on the way and must equal the stored
+    ``<stem>.npy`` bit for bit (over its frames: files of an older generator
+    may lack the last frame); the trajectories are never rewritten. A
+    phrase that has its FLAC is skipped (the cache), so the command can be
+    stopped and run again. Older ``<stem>.wav`` files are converted to FLAC
+    (same samples) and removed.
+
+    Parameters
+    ----------
+    root : path-like
+        Directory with ``train/`` and ``test/`` (e.g. the bundled
+        ``dam/datasets/data/vtl``).
+    fraction : float, default 1.0
+        Share of the phrases of each split that should have audio.
+    max_cpu_seconds : float, optional
+        Stop starting new phrases once this process has used that much CPU
+        (VTL needs about 4 s per second of speech).
+    deadline : float, optional
+        Stop starting new phrases after this ``time.time()``.
+    audio_rate : int, default 16000
+    verbose : int, default 1
+        0 silences the progress bar (shown on a terminal only).
+    lexicon, mapping
+        As for :func:`generate_vtl_corpus` (defaults: the bundled ones).
+
+    Returns
+    -------
+    dict
+        ``{split: {"n": phrases, "audio": phrases with audio, "added": new
+        this run, "seconds": seconds of speech with audio, "bytes": bytes of
+        FLAC}}``.
+
+    Raises
+    ------
+    DataError
+        A ``corpus.json`` that the seed does not reproduce, or a trajectory
+        that VTL no longer reproduces bit for bit.
+    """
+    import time
+
+    from tqdm.auto import tqdm
+
+    root = Path(root)
+    t_cpu0 = time.process_time()
+    report = {}
+    for split in ("train", "test"):
+        d = root / split
+        meta_path = d / "corpus.json"
+        if not meta_path.exists():
+            raise DataError(str(d), "corpus.json", None, "no such file: not a generated vtl corpus split")
+        meta = json.loads(meta_path.read_text(encoding="utf-8"))
+        frame_rate = float(meta["frame_rate"])
+        plans, _ = plan_corpus(seed=int(meta.get("seed", 0)), lexicon=lexicon,
+                               mapping=mapping if mapping is not None else meta.get("symbol_map"))
+        plans = plans[split]
+        stored = meta.get("utterances", {})
+        if [p.name for p in plans] != list(stored) or any(
+                list(p.words) != stored[p.name]["words"] for p in plans):
+            raise DataError(str(meta_path), "utterances", f"{len(stored)} phrases",
+                            f"seed {meta.get('seed')} with the default sizes does not plan these phrases; "
+                            "regenerate the corpus with the audio share you need instead (--audio-fraction)")
+        # Old WAVs become FLAC (same int16 samples): one audio format per corpus.
+        for p in plans:
+            wav = d / f"{p.name}.wav"
+            if wav.exists() and not (d / f"{p.name}{AUDIO_SUFFIX}").exists():
+                from scipy.io import wavfile
+                sr, x = wavfile.read(wav)
+                if sr != audio_rate:
+                    raise DataError(str(wav), "sample rate", sr, f"expected {audio_rate} Hz")
+                write_flac(d / f"{p.name}{AUDIO_SUFFIX}", x, sr)
+            if wav.exists():
+                wav.unlink()
+        have = [i for i, p in enumerate(plans) if (d / f"{p.name}{AUDIO_SUFFIX}").exists()]
+        order = audio_priority(len(plans), first=have)
+        n_target = min(len(plans), math.ceil(fraction * len(plans) - 1e-9))
+        todo = [i for i in order[:n_target] if i not in set(have)]
+        added = 0
+        show = verbose > 0 and sys.stderr.isatty()
+        with tqdm(total=len(todo), desc=f"vtl audio {split}", disable=not show, file=sys.stderr) as bar:
+            for i in todo:
+                if max_cpu_seconds is not None and time.process_time() - t_cpu0 >= max_cpu_seconds:
+                    break
+                if deadline is not None and time.time() >= deadline:
+                    break
+                p = plans[i]
+                res = synthesize_audio(p, audio_rate=audio_rate, frame_rate=frame_rate)
+                npy = d / f"{p.name}.npy"
+                if npy.exists():
+                    # Bit for bit over the stored frames: an older generator stored one frame fewer
+                    # when duration x frame rate fell a rounding error short of a whole frame.
+                    old = np.load(npy)
+                    new = res["trajectory"].astype(np.float32)
+                    if (old.ndim != 2 or old.shape[1] != new.shape[1] or not 0 <= len(new) - len(old) <= 1
+                            or old.tobytes() != new[:len(old)].tobytes()):
+                        raise DataError(str(npy), "trajectory", p.name,
+                                        "VTL does not reproduce the stored trajectory bit for bit; the audio "
+                                        "would not belong to it (another VTL version?)")
+                write_flac(d / f"{p.name}{AUDIO_SUFFIX}", res["audio"], audio_rate)
+                added += 1
+                bar.update(1)
+        on_disk = {p.name for p in plans if (d / f"{p.name}{AUDIO_SUFFIX}").exists()}
+        for name, entry in stored.items():
+            entry["audio"] = name in on_disk
+        meta["audio_rate"] = int(audio_rate)
+        meta["audio_format"] = AUDIO_SUFFIX.lstrip(".")
+        with atomic_write(meta_path, "w", encoding="utf-8") as fh:
+            fh.write(json.dumps(meta, indent=1, ensure_ascii=False) + "\n")
+        report[split] = {
+            "n": len(plans), "audio": len(on_disk), "added": added,
+            "seconds": float(sum(sum(p.durations) for p in plans if p.name in on_disk)),
+            "bytes": int(sum((d / f"{n}{AUDIO_SUFFIX}").stat().st_size for n in on_disk)),
+        }
+    return report

@@ -1,6 +1,6 @@
 """Compare synthesizers on held-out data: the table a reviewer would accept.
 
->>> from dam.compare import compare
+>>> from dam.evaluation.compare import compare
 >>> res = compare(["dam", "cohen-massaro", "mmm", "dtree"], "vtl:train", "vtl:test",
 ...               n_jobs=2, out="results/")                       # doctest: +SKIP
 >>> print(res.table())                                             # doctest: +SKIP
@@ -12,6 +12,18 @@ per channel and per utterance, a paired two-sided Wilcoxon signed-rank test
 of its per-utterance RMSE against the best model's (Holm-corrected over the
 models compared), fit seconds, synthesis microseconds per phone and frames
 per second.
+
+:func:`compare` runs four steps, each a function of its own:
+
+1. **planning** (:func:`plan_comparison`): model names, parameters, channels,
+   frame rates and the output directory checked before any fit; the folds;
+   one :class:`Task` per model and fold;
+2. **running** (:func:`run_tasks`): the tasks through joblib, each giving a
+   :class:`TaskResult`;
+3. **statistics** (:func:`score_results`, with :mod:`dam.evaluation.statistics`):
+   the scores, intervals and tests, one :class:`~dam.evaluation.report.ModelScore`
+   row per model, in a :class:`ComparisonResult`;
+4. **reporting** (:mod:`dam.evaluation.report`): the table, the files and the figures.
 
 Models and cross-validation folds are independent tasks run through joblib
 (``n_jobs``); any joblib backend works, so a Dask or Ray cluster takes the
@@ -31,76 +43,25 @@ test utterance) and ``rmse.png`` (RMSE per model with 95% intervals).
 """
 from __future__ import annotations
 
-import csv
-import math
 import os
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from dam.corpus.atomic import check_output
 from dam.corpus.data import Corpus
+from dam.evaluation.report import SUMMARY_COLUMNS, ModelScore, markdown_table, plot_report, write_report
+from dam.evaluation.statistics import bootstrap_rmse_ci, holm, tests_against
 
-__all__ = ["compare", "ComparisonResult", "holm", "bootstrap_rmse_ci", "run_demo", "DEMO_MODELS"]
+__all__ = ["compare", "ComparisonResult", "ModelScore", "Task", "TaskResult", "ComparisonPlan", "plan_comparison",
+           "run_tasks", "score_results", "holm", "bootstrap_rmse_ci", "run_demo", "demo_plan", "DEMO_MODELS",
+           "SUMMARY_COLUMNS"]
 
 DEMO_MODELS = ("phone-mean", "target-interpolation", "dam", "dam-m0", "cohen-massaro", "mmm", "dtree",
                ("dtree-linguistic", "dtree", {"features": "linguistic"}))
-SUMMARY_COLUMNS = ("model", "rmse", "rmse_ci_low", "rmse_ci_high", "pearson_r", "fit_seconds",
-                   "predict_us_per_phone", "frames_per_second", "wilcoxon_p", "wilcoxon_p_holm", "n_utterances",
-                   "status", "reason")
-
-
-# -- statistics -------------------------------------------------------------
-def holm(pvalues) -> np.ndarray:
-    """Holm–Bonferroni adjusted p-values (step-down, monotone, capped at 1).
-
-    Parameters
-    ----------
-    pvalues : array-like, shape (m,)
-
-    Returns
-    -------
-    ndarray, shape (m,), in the input order
-    """
-    p = np.asarray(pvalues, dtype=float)
-    m = len(p)
-    order = np.argsort(p, kind="stable")
-    adjusted = np.minimum(1.0, np.maximum.accumulate((m - np.arange(m)) * p[order]))
-    out = np.empty(m)
-    out[order] = adjusted
-    return out
-
-
-def bootstrap_rmse_ci(sse, counts, *, n_boot: int = 2000, level: float = 0.95, random_state: int = 0):
-    """Percentile bootstrap interval of the pooled RMSE, resampling utterances.
-
-    Parameters
-    ----------
-    sse : array-like, shape (n_utterances,)
-        Sum of squared errors of every utterance (all frames and channels).
-    counts : array-like, shape (n_utterances,)
-        Number of values (frames x channels) of every utterance.
-
-    Returns
-    -------
-    (low, high) : tuple of float
-    """
-    sse, counts = np.asarray(sse, dtype=float), np.asarray(counts, dtype=float)
-    rng = np.random.default_rng(random_state)
-    idx = rng.integers(0, len(sse), size=(n_boot, len(sse)))
-    boot = np.sqrt(sse[idx].sum(axis=1) / counts[idx].sum(axis=1))
-    tail = 100 * (1 - level) / 2
-    return float(np.percentile(boot, tail)), float(np.percentile(boot, 100 - tail))
-
-
-def _wilcoxon(a, b) -> float:
-    """Two-sided paired Wilcoxon signed-rank p-value; 1 when every difference is zero."""
-    from scipy.stats import wilcoxon
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if np.allclose(a, b, rtol=0, atol=0):
-        return 1.0
-    return float(wilcoxon(a, b).pvalue)
 
 
 # -- the result ---------------------------------------------------------------
@@ -110,12 +71,17 @@ class ComparisonResult:
 
     Attributes
     ----------
-    summary : list of dict
-        One row per model, keys :data:`SUMMARY_COLUMNS`; ``status`` is
-        ``"ok"``, ``"skipped"`` or ``"failed"`` (with ``reason``). Rows are
-        sorted by RMSE, skipped and failed models last.
+    summary : list of ModelScore
+        One row per model (:data:`~dam.evaluation.report.SUMMARY_COLUMNS`);
+        ``status`` is ``"ok"``, ``"skipped"`` or ``"failed"`` (with ``reason``).
+        Rows are sorted by RMSE, skipped and failed models last.
     per_channel : list of dict
         ``model, channel, rmse, pearson_r``.
+    per_sensor : list of dict
+        ``model, sensor, channels, distance``: the mean Euclidean distance of
+        each sensor (Medina et al. 2022); empty when the channels form no
+        sensors. The summary's ``sensor_error`` is their Eq. 1 averaged over
+        utterances, in ``length_unit``.
     per_utterance : list of dict
         ``model, fold, utterance, n_frames, rmse, pearson_r``.
     best : str or None
@@ -133,8 +99,10 @@ class ComparisonResult:
     best: str | None
     corpus: str = ""
     example: dict = field(default_factory=dict)
+    per_sensor: list = field(default_factory=list)
+    length_unit: str | None = None
 
-    def row(self, model: str) -> dict:
+    def row(self, model: str) -> ModelScore:
         """The summary row of ``model``."""
         for r in self.summary:
             if r["model"] == model:
@@ -142,112 +110,108 @@ class ComparisonResult:
         raise KeyError(f"no model {model!r} in this comparison; models: {[r['model'] for r in self.summary]}")
 
     def table(self) -> str:
-        """The summary as a Markdown table, with a note on the tests."""
-        head = ("| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | p vs best (Holm) |\n"
-                "|---|---:|---:|---:|---:|---:|---:|---:|")
-        lines = [head]
-        for r in self.summary:
-            if r["status"] != "ok":
-                lines.append(f"| {r['model']} | {r['status']}: {r['reason']} | | | | | | |")
-                continue
-            p = "best" if r["model"] == self.best else _fmt_p(r["wilcoxon_p_holm"])
-            lines.append(f"| {r['model']} | {r['rmse']:.4g} | {r['rmse_ci_low']:.4g}–{r['rmse_ci_high']:.4g} | "
-                         f"{r['pearson_r']:.3f} | {r['fit_seconds']:.2f} | {r['predict_us_per_phone']:.1f} | "
-                         f"{r['frames_per_second']:.3g} | {p} |")
-        n_utt = max([r["n_utterances"] for r in self.summary if r["status"] == "ok"] or [0])
-        lines.append("")
-        lines.append(f"Held-out {self.corpus}: {n_utt} utterances. RMSE in channel units over all frames and "
-                     "channels; 95% CI by bootstrap over utterances; Pearson r per channel, averaged; "
-                     "p: two-sided paired Wilcoxon signed-rank test of per-utterance RMSE against the best "
-                     "model, Holm-corrected.")
-        # The exact two-sided signed-rank test cannot go below 2 / 2^n; Holm multiplies the smallest p.
-        n_tests = sum(r["status"] == "ok" for r in self.summary) - 1
-        floor = min(1.0, n_tests * 2.0 / 2.0 ** n_utt) if n_utt else 1.0
-        if n_tests > 0 and floor > 0.05:
-            lines.append(f"With {n_utt} utterances and {n_tests} comparisons no Holm-corrected p can fall below "
-                         f"{floor:.2g}: use more test utterances or --cv for significance.")
-        return "\n".join(lines)
+        """The summary as a Markdown table, with a note on the tests (:func:`~dam.evaluation.report.markdown_table`)."""
+        return markdown_table(self)
 
     def write(self, out) -> list[str]:
         """Write the CSVs, the Markdown table and the figures into directory ``out``; return the paths."""
-        os.makedirs(out, exist_ok=True)
-        paths = [_write_csv(os.path.join(out, "summary.csv"), self.summary, SUMMARY_COLUMNS),
-                 _write_csv(os.path.join(out, "per_channel.csv"), self.per_channel,
-                            ("model", "channel", "rmse", "pearson_r")),
-                 _write_csv(os.path.join(out, "per_utterance.csv"), self.per_utterance,
-                            ("model", "fold", "utterance", "n_frames", "rmse", "pearson_r"))]
-        md = os.path.join(out, "summary.md")
-        with open(md, "w", encoding="utf-8") as fh:
-            fh.write(self.table() + "\n")
-        paths.append(md)
-        paths += self.plot(out)
-        return paths
+        return write_report(self, out)
 
     def plot(self, out) -> list[str]:
-        """``predictions.png`` and ``rmse.png`` in ``out``; returns their paths."""
-        import matplotlib
-        if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "ps", "cairo"):
-            matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        ok = [r for r in self.summary if r["status"] == "ok"]
-        paths = []
-        if self.example:
-            ex = self.example
-            truth = ex["truth"]
-            # the channels that move most in this utterance
-            show = np.argsort(-truth.std(axis=0))[:min(4, truth.shape[1])]
-            t = np.arange(len(truth)) / ex["frame_rate"]
-            fig, axes = plt.subplots(len(show), 1, figsize=(9, 2.2 * len(show)), sharex=True, squeeze=False)
-            for ax, c in zip(axes[:, 0], show):
-                ax.plot(t, truth[:, c], color="black", lw=2.2, label="truth")
-                for r in ok:
-                    if r["model"] in ex["predictions"]:
-                        ax.plot(t, ex["predictions"][r["model"]][:, c], lw=1.1, label=r["model"])
-                ax.set_ylabel(ex["channels"][c])
-            axes[0, 0].set_title(f"held-out utterance {ex['utterance']}")
-            axes[0, 0].legend(fontsize=7, ncol=4, loc="upper right")
-            axes[-1, 0].set_xlabel("time (s)")
-            fig.tight_layout()
-            paths.append(os.path.join(out, "predictions.png"))
-            fig.savefig(paths[-1], dpi=110)
-            plt.close(fig)
-        if ok:
-            fig, ax = plt.subplots(figsize=(7, 0.45 * len(ok) + 1.2))
-            y = np.arange(len(ok))[::-1]
-            vals = np.array([r["rmse"] for r in ok])
-            err = np.array([[r["rmse"] - r["rmse_ci_low"] for r in ok], [r["rmse_ci_high"] - r["rmse"] for r in ok]])
-            ax.barh(y, vals, xerr=err, color=["tab:green" if r["model"] == self.best else "tab:blue" for r in ok],
-                    capsize=3)
-            ax.set_yticks(y, [r["model"] for r in ok])
-            ax.set_xlabel("held-out RMSE (95% bootstrap CI over utterances)")
-            ax.set_title(f"{self.corpus}")
-            fig.tight_layout()
-            paths.append(os.path.join(out, "rmse.png"))
-            fig.savefig(paths[-1], dpi=110)
-            plt.close(fig)
-        return paths
+        """``predictions.png`` and ``rmse.png`` in ``out`` (:mod:`dam.evaluation.figures`); returns their paths."""
+        return plot_report(self, out)
 
 
-def _fmt_p(p) -> str:
-    return "" if p == "" or p is None else (f"{p:.2g}" if p >= 1e-4 else f"{p:.1e}")
+# -- planning -------------------------------------------------------------------
+#: Expected fit cost relative to the DAM's (the demo's measured fit seconds), for the ETA of a
+#: comparison: the cheap references finish first and must not make the rest look short.
+EXPECTED_FIT_COST = {"phone-mean": 0.01, "target-interpolation": 0.01, "dam": 1.0, "dam-m0": 0.2,
+                     "cohen-massaro": 1.0, "mmm": 0.6, "dtree": 0.3, "sliding-dnn": 2.0, "causal-mlp": 1.0,
+                     "lstm": 5.0, "gru": 2.0, "transformer": 5.0}
 
 
-def _write_csv(path, rows, columns) -> str:
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(columns), extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: _csv_value(r.get(k, "")) for k in columns})
-    return path
+def expected_fit_cost(model) -> float:
+    """Relative expected fit cost of a registry name or an estimator (1 for unknown models)."""
+    name = model if isinstance(model, str) else (getattr(model, "name", "") or "")
+    return EXPECTED_FIT_COST.get(name, 1.0)
 
 
-def _csv_value(v):
-    if isinstance(v, float):
-        return "" if not math.isfinite(v) else repr(v)
-    return v
+@dataclass
+class Task:
+    """One model fitted on one fold and scored on its test part (a joblib job).
+
+    Attributes
+    ----------
+    label : str
+        The model's row in the summary.
+    name : str or None
+        Registry name (None when ``estimator`` is given).
+    params : dict
+        Hyperparameters for ``name``.
+    estimator : Synthesizer or None
+        An instance to clone instead of a registry name.
+    fold : int
+    train, test : Corpus
+    unknown_phone : str or None
+        Given to a model that has this parameter and was not given it explicitly.
+    """
+
+    label: str
+    name: str | None
+    params: dict
+    estimator: object
+    fold: int
+    train: Corpus
+    test: Corpus
+    unknown_phone: str | None = None
 
 
-# -- running ------------------------------------------------------------------
+@dataclass
+class ComparisonPlan:
+    """What :func:`compare` will run: the checked models, the folds and the tasks.
+
+    Attributes
+    ----------
+    specs : list of tuple
+        ``(label, registry name or None, params, estimator or None)`` per model, in the order given.
+    folds : list of (Corpus, Corpus)
+        ``(train, test)`` per fold.
+    where : str
+        What is compared on, for the table's caption.
+    tasks : list of Task
+        One per model and fold, model major.
+    """
+
+    specs: list
+    folds: list
+    where: str
+    tasks: list
+
+
+def _check_specs(specs) -> None:
+    """Refuse unknown model names and bad hyperparameters before any data is loaded or model fitted.
+
+    A model whose optional dependency is missing passes: it is listed as skipped, with the reason.
+    """
+    from dam.registry import available, check_params, get, names
+    known = names()
+    for label, name, params, est in specs:
+        if est is not None:
+            check_params(est)
+            continue
+        if name not in known:
+            raise KeyError(f"unknown model {name!r}" + (f" (row {label!r})" if label != name else "")
+                           + f"; known models: {', '.join(known)} (see `dam models`)")
+        if not available(name)[0]:
+            continue
+        cls = get(name)
+        bad = sorted(set(params) - set(cls._param_names()))
+        if bad:
+            raise ValueError(f"model {label!r} ({cls.__name__}): unknown parameter(s) {bad}; "
+                             f"valid parameters are {cls._param_names()}")
+        check_params(cls(**params))
+
+
 def _model_specs(models) -> list[tuple[str, str | None, dict, object]]:
     """(label, registry name, params, estimator or None) for every requested model."""
     from dam.base import Synthesizer
@@ -279,45 +243,6 @@ def _model_specs(models) -> list[tuple[str, str | None, dict, object]]:
     return out
 
 
-def _run_task(label, name, params, estimator, fold, train, test, unknown_phone=None) -> dict:
-    """Fit one model on one fold and predict its test part (runs in a joblib worker)."""
-    from dam.registry import available, get
-    res = {"model": label, "fold": fold, "status": "ok", "reason": ""}
-    try:
-        if estimator is None:
-            ok, why = available(name)
-            if not ok:
-                return {**res, "status": "skipped", "reason": f"optional dependency missing: {why}"}
-            model = get(name)(**params)
-        else:
-            from dam.base import clone
-            model = clone(estimator)
-            params = estimator.get_params()  # an instance keeps all its own settings
-        if unknown_phone is not None and "unknown_phone" in model.get_params() and "unknown_phone" not in params:
-            model.set_params(unknown_phone=unknown_phone)
-        t0 = time.perf_counter()
-        model.fit(train)
-        res["fit_seconds"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        res["predictions"] = model.predict(test.alignments)
-        res["first_predict_seconds"] = time.perf_counter() - t0  # includes jit compilation (neural models)
-        times = []
-        while not times or (sum(times) < 1.0 and len(times) < 5):  # warm runs; their median is steadier
-            t0 = time.perf_counter()
-            model.predict(test.alignments)
-            times.append(time.perf_counter() - t0)
-        res["predict_seconds"] = float(np.median(times))
-    except ImportError as exc:
-        return {**res, "status": "skipped", "reason": f"optional dependency missing: {exc}"}
-    except KeyError as exc:
-        return {**res, "status": "failed", "reason": str(exc.args[0] if exc.args else exc)}
-    except Exception as exc:  # one broken model must not sink the comparison
-        return {**res, "status": "failed", "reason": f"{type(exc).__name__}: {exc}"}
-    res["n_phones"] = sum(len(a) for a in test.alignments)
-    res["n_frames"] = sum(u.n_frames for u in test)
-    return res
-
-
 def _as_corpus(spec) -> Corpus:
     if isinstance(spec, Corpus):
         return spec
@@ -325,9 +250,280 @@ def _as_corpus(spec) -> Corpus:
     return resolve(spec)
 
 
+def _audio_models(specs) -> list[str]:
+    """Labels of the models that read audio (a model that cannot be built is left to its task)."""
+    from dam.registry import get
+    out = []
+    for label, name, params, est in specs:
+        try:
+            model = est if est is not None else get(name)(**params)
+            if "audio" in model.reads():
+                out.append(label)
+        except Exception:  # noqa: BLE001 - a missing extra or bad class is reported by its task
+            continue
+    return out
+
+
+def _with_audio(corpus: Corpus, audio_models: list[str]) -> Corpus:
+    """The utterances of ``corpus`` that have audio; says on stderr when that drops some."""
+    from dam.corpus.data import DataError
+    keep = [i for i, u in enumerate(corpus) if u.audio is not None]
+    if not keep:
+        raise DataError(corpus.source, "audio", corpus[0].name,
+                        f"no utterance of this corpus has audio, and {', '.join(audio_models)} read(s) audio")
+    if len(keep) < len(corpus):
+        print(f"compare: {', '.join(audio_models)} read(s) audio: every model is trained and scored on the "
+              f"{len(keep)} of {len(corpus)} utterances of {corpus.name or corpus.source} that have audio",
+              file=sys.stderr)
+        corpus = corpus.subset(keep)
+    return corpus
+
+
+def plan_comparison(models, train, test=None, cv: int | None = None, out=None, *, test_size: float = 0.25,
+                    random_state: int = 0, unknown_phone: str | None = "fallback", channels=None) -> ComparisonPlan:
+    """Check everything that can be checked before a fit and build the tasks.
+
+    Parameters are those of :func:`compare`. Unknown model names and bad
+    hyperparameters (:func:`dam.registry.check_params`), an output directory
+    inside an input corpus, train and test channels or frame rates that differ
+    raise here, before any model is fitted.
+
+    Returns
+    -------
+    ComparisonPlan
+    """
+    specs = _model_specs(models)
+    _check_specs(specs)  # a typo in a name or a parameter fails now, not after the other fits
+    train = _as_corpus(train)
+    if out is not None:  # checked before any fit: never into an input corpus, never over a corpus
+        inputs = [train.source] + ([test] if isinstance(test, (str, os.PathLike)) else
+                                   [getattr(test, "source", None)])
+        check_output(out, inputs=inputs, directory=True, merge=True, option="out")
+        os.makedirs(out, exist_ok=True)
+    if channels is not None:
+        train = train.select_channels(channels)
+    audio_models = _audio_models(specs)
+    if audio_models:  # every row on the same utterances: those that have audio
+        train = _with_audio(train, audio_models)
+    if test is not None and cv is not None:
+        raise ValueError("give either test or cv, not both")
+    if cv is not None:
+        folds = list(train.kfold(int(cv), random_state=random_state))
+        where = f"{train.name or train.source or 'corpus'} ({int(cv)}-fold cross-validation)"
+    elif test is not None:
+        test = _as_corpus(test)
+        if channels is not None:
+            test = test.select_channels(channels)
+        if audio_models:
+            test = _with_audio(test, audio_models)
+        folds = [(train, test)]
+        where = f"{test.name or test.source or 'test corpus'}"
+    else:
+        folds = [train.train_test_split(test_size, random_state=random_state)]
+        where = f"{train.name or train.source or 'corpus'} (hold-out {test_size:g})"
+    if tuple(folds[0][1].channels) != tuple(folds[0][0].channels):
+        raise ValueError(f"train and test channels differ: {list(folds[0][0].channels)} vs "
+                         f"{list(folds[0][1].channels)}")
+    if folds[0][1].frame_rate != folds[0][0].frame_rate:
+        # models predict at the training frame rate: scores against another rate would be meaningless
+        raise ValueError(f"train and test frame rates differ: {folds[0][0].frame_rate:g} Hz vs "
+                         f"{folds[0][1].frame_rate:g} Hz")
+    tasks = [Task(label, name, params, est, k, tr, te, unknown_phone) for label, name, params, est in specs
+             for k, (tr, te) in enumerate(folds)]
+    return ComparisonPlan(specs=specs, folds=folds, where=where, tasks=tasks)
+
+
+# -- running ------------------------------------------------------------------
+@dataclass
+class TaskResult:
+    """What one :class:`Task` gave.
+
+    Attributes
+    ----------
+    model : str
+        The task's label.
+    fold : int
+    status : {"ok", "skipped", "failed"}
+    reason : str
+    predictions : list of ndarray
+        One ``(n_frames, n_channels)`` array per test utterance (empty unless ok).
+    fit_seconds, first_predict_seconds, predict_seconds : float
+        The first prediction includes jit compilation (neural models); ``predict_seconds``
+        is the median of warm runs.
+    n_phones, n_frames : int
+        Of the test part.
+    """
+
+    model: str
+    fold: int
+    status: str = "ok"
+    reason: str = ""
+    predictions: list = field(default_factory=list)
+    fit_seconds: float = float("nan")
+    first_predict_seconds: float = float("nan")
+    predict_seconds: float = float("nan")
+    n_phones: int = 0
+    n_frames: int = 0
+
+
+def run_task(task: Task) -> TaskResult:
+    """Fit one model on one fold and predict its test part (runs in a joblib worker)."""
+    from dam.base import predict_inputs
+    from dam.registry import available, get
+    res = TaskResult(task.label, task.fold)
+    params = task.params
+    try:
+        if task.estimator is None:
+            ok, why = available(task.name)
+            if not ok:
+                return _not_ok(res, "skipped", f"optional dependency missing: {why}")
+            model = get(task.name)(**params)
+        else:
+            from dam.base import clone
+            model = clone(task.estimator)
+            params = task.estimator.get_params()  # an instance keeps all its own settings
+        if (task.unknown_phone is not None and "unknown_phone" in model.get_params()
+                and "unknown_phone" not in params):
+            model.set_params(unknown_phone=task.unknown_phone)
+        t0 = time.perf_counter()
+        model.fit(task.train)
+        res.fit_seconds = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        inputs = predict_inputs(model, task.test)
+        res.predictions = model.predict(inputs)
+        res.first_predict_seconds = time.perf_counter() - t0
+        times = []
+        while not times or (sum(times) < 1.0 and len(times) < 5):  # warm runs; their median is steadier
+            t0 = time.perf_counter()
+            model.predict(inputs)
+            times.append(time.perf_counter() - t0)
+        res.predict_seconds = float(np.median(times))
+    except ImportError as exc:
+        return _not_ok(res, "skipped", f"optional dependency missing: {exc}")
+    except KeyError as exc:
+        return _not_ok(res, "failed", str(exc.args[0] if exc.args else exc))
+    except Exception as exc:  # one broken model must not sink the comparison
+        return _not_ok(res, "failed", f"{type(exc).__name__}: {exc}")
+    res.n_phones = sum(len(a) for a in task.test.alignments)
+    res.n_frames = sum(u.n_frames for u in task.test)
+    return res
+
+
+def _not_ok(res: TaskResult, status: str, reason: str) -> TaskResult:
+    return TaskResult(res.model, res.fold, status=status, reason=reason)
+
+
+def run_tasks(plan: ComparisonPlan, n_jobs: int = 1,
+              progress: Callable[[TaskResult, int, int], None] | None = None) -> list[TaskResult]:
+    """Run every task of ``plan`` through joblib; results in the order they finish.
+
+    Parameters
+    ----------
+    plan : ComparisonPlan
+    n_jobs : int, default 1
+        joblib workers (-1: all cores); the active joblib backend (Dask, Ray) is used.
+    progress : callable, optional
+        ``progress(result, done, total)`` after every task, besides :mod:`dam.progress`.
+
+    Returns
+    -------
+    list of TaskResult
+    """
+    from joblib import Parallel, delayed
+
+    from dam.progress import task as progress_task
+    tasks = plan.tasks
+    try:
+        parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+    except ValueError:  # a backend without result generators (some Dask/Ray versions): results at the end
+        parallel = Parallel(n_jobs=n_jobs)
+    index = {(t.label, t.fold): i for i, t in enumerate(tasks)}
+    several = len(plan.folds) > 1
+    results = []
+    with progress_task("compare", weights=[expected_fit_cost(t.name or t.estimator) for t in tasks],
+                        unit="fold" if several else "fit") as bar:
+        for r in parallel(delayed(run_task)(t) for t in tasks):
+            results.append(r)
+            bar.step(f"{r.model}" + (f" fold {r.fold}" if several else "") + f": {r.status}",
+                     index=index[(r.model, r.fold)])
+            if progress is not None:
+                progress(r, len(results), len(tasks))
+    return results
+
+
+# -- statistics -----------------------------------------------------------------
+def score_results(plan: ComparisonPlan, results: list, *, n_boot: int = 2000, random_state: int = 0,
+                  verbose: int = 1) -> ComparisonResult:
+    """Score the predictions of every model on the pooled test utterances of all folds.
+
+    Returns
+    -------
+    ComparisonResult
+        Rows sorted by RMSE, skipped and failed models last; every ok model but
+        the best tested against the best (:func:`~dam.evaluation.statistics.tests_against`).
+    """
+    from dam.evaluation.metrics import evaluate
+    folds = plan.folds
+    pooled = Corpus([u for _, te in folds for u in te], name=plan.where, metadata=folds[0][1].metadata)
+    fold_of = [k for k, (_, te) in enumerate(folds) for _ in te]
+    summary, per_channel, per_utt, per_sensor, preds_by_model, utt_rmse = [], [], [], [], {}, {}
+    for label, *_ in plan.specs:
+        mine = sorted((r for r in results if r.model == label), key=lambda r: r.fold)
+        bad = [r for r in mine if r.status != "ok"]
+        if bad:
+            summary.append(ModelScore(label, status=bad[0].status, reason=bad[0].reason))
+            if verbose:
+                print(f"compare: {label} {bad[0].status}: {bad[0].reason}", file=sys.stderr)
+            continue
+        preds = [p for r in mine for p in r.predictions]
+        ev = evaluate(None, pooled, predictions=preds)
+        preds_by_model[label] = preds
+        # masked (missing) values are not scored
+        sse = np.array([np.sum((u.trajectory - p) ** 2 * (1 if u.mask is None else u.mask))
+                        for u, p in zip(pooled, preds)])
+        cnt = np.array([u.trajectory.size if u.mask is None else u.mask.sum() for u in pooled], dtype=float)
+        lo, hi = bootstrap_rmse_ci(sse, cnt, n_boot=n_boot, random_state=random_state)
+        predict_s = sum(r.predict_seconds for r in mine)
+        summary.append(ModelScore(
+            label, rmse=ev.rmse, rmse_ci_low=lo, rmse_ci_high=hi, pearson_r=ev.pearson_r,
+            sensor_error=ev.sensor_error if ev.sensors else None,
+            fit_seconds=float(np.mean([r.fit_seconds for r in mine])),
+            predict_us_per_phone=1e6 * predict_s / sum(r.n_phones for r in mine),
+            frames_per_second=sum(r.n_frames for r in mine) / max(predict_s, 1e-12),
+            n_utterances=len(pooled)))
+        utt_rmse[label] = np.array([row["rmse"] for row in ev.per_utterance])
+        for c, e, rr in zip(ev.channels, ev.rmse_per_channel, ev.pearson_per_channel):
+            per_channel.append({"model": label, "channel": c, "rmse": float(e), "pearson_r": float(rr)})
+        for (sensor, chans), d in zip(ev.sensors.items(), ev.sensor_error_per_sensor):
+            per_sensor.append({"model": label, "sensor": sensor, "channels": " ".join(chans), "distance": float(d)})
+        for k, row in zip(fold_of, ev.per_utterance):
+            per_utt.append({"model": label, "fold": k, **row})
+
+    ok = [r for r in summary if r.status == "ok"]
+    best = min(ok, key=lambda r: r.rmse).model if ok else None
+    if best is not None:
+        tested = tests_against(utt_rmse[best], {r.model: utt_rmse[r.model] for r in ok if r.model != best})
+        for r in ok:
+            if r.model in tested:
+                r.wilcoxon_p, r.wilcoxon_p_holm = tested[r.model]
+    summary.sort(key=lambda r: (r.status != "ok", r.rmse if r.rmse is not None else 0.0))
+
+    example = {}
+    if preds_by_model:
+        u = pooled[0]
+        example = {"utterance": u.name, "frame_rate": u.frame_rate, "channels": list(u.channels),
+                   "alignment": u.alignment, "units": pooled.metadata.get("units"),
+                   "truth": np.asarray(u.trajectory), "predictions": {m: p[0] for m, p in preds_by_model.items()}}
+    return ComparisonResult(summary=summary, per_channel=per_channel, per_utterance=per_utt, best=best,
+                            corpus=plan.where, example=example, per_sensor=per_sensor,
+                            length_unit=pooled.metadata.get("length_unit"))
+
+
+# -- all four -----------------------------------------------------------------------
 def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, out=None, *,
             test_size: float = 0.25, random_state: int = 0, n_boot: int = 2000, unknown_phone: str | None = "fallback",
-            channels=None, verbose: int = 1) -> ComparisonResult:
+            channels=None, verbose: int = 1,
+            progress: Callable[[TaskResult, int, int], None] | None = None) -> ComparisonResult:
     """Fit and score several synthesizers on the same held-out data.
 
     Parameters
@@ -362,137 +558,100 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
         Compare on these channels only (see :meth:`dam.Corpus.select_channels`).
     verbose : int, default 1
         Progress bar on standard error (only when it is a terminal).
+    progress : callable, optional
+        ``progress(result, done, total)`` after every fitted task (a :class:`TaskResult`).
 
     Returns
     -------
     ComparisonResult
+
+    Examples
+    --------
+    >>> import dam
+    >>> res = dam.compare(["phone-mean", "target-interpolation"], "tiny", cv=2, verbose=0)
+    >>> [row["model"] for row in res.summary]
+    ['target-interpolation', 'phone-mean']
     """
-    from joblib import Parallel, delayed
-    from dam.evaluation.metrics import evaluate
-    specs = _model_specs(models)
-    train = _as_corpus(train)
-    if channels is not None:
-        train = train.select_channels(channels)
-    if test is not None and cv is not None:
-        raise ValueError("give either test or cv, not both")
-    if cv is not None:
-        folds = list(train.kfold(int(cv), random_state=random_state))
-        where = f"{train.name or train.source or 'corpus'} ({int(cv)}-fold cross-validation)"
-    elif test is not None:
-        test = _as_corpus(test)
-        if channels is not None:
-            test = test.select_channels(channels)
-        folds = [(train, test)]
-        where = f"{test.name or test.source or 'test corpus'}"
-    else:
-        folds = [train.train_test_split(test_size, random_state=random_state)]
-        where = f"{train.name or train.source or 'corpus'} (hold-out {test_size:g})"
-    if tuple(folds[0][1].channels) != tuple(folds[0][0].channels):
-        raise ValueError(f"train and test channels differ: {list(folds[0][0].channels)} vs {list(folds[0][1].channels)}")
-    if folds[0][1].frame_rate != folds[0][0].frame_rate:
-        # models predict at the training frame rate: scores against another rate would be meaningless
-        raise ValueError(f"train and test frame rates differ: {folds[0][0].frame_rate:g} Hz vs "
-                         f"{folds[0][1].frame_rate:g} Hz")
-    tasks = [(label, name, params, est, k, tr, te, unknown_phone) for label, name, params, est in specs
-             for k, (tr, te) in enumerate(folds)]
-    from tqdm.auto import tqdm
-    bar = tqdm(total=len(tasks), desc="compare", unit="fit", file=sys.stderr,
-               disable=not verbose or not sys.stderr.isatty())
-    results = []
-    try:
-        parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
-    except ValueError:  # a backend without result generators (some Dask/Ray versions): results at the end
-        parallel = Parallel(n_jobs=n_jobs)
-    for r in parallel(delayed(_run_task)(*t) for t in tasks):
-        results.append(r)
-        bar.set_postfix_str(f"{r['model']} fold {r['fold']}: {r['status']}")
-        bar.update(1)
-    bar.close()
-
-    pooled = Corpus([u for _, te in folds for u in te], name=where)
-    fold_of = [k for k, (_, te) in enumerate(folds) for _ in te]
-    summary, per_channel, per_utt, preds_by_model = [], [], [], {}
-    for label, *_ in specs:
-        mine = sorted((r for r in results if r["model"] == label), key=lambda r: r["fold"])
-        bad = [r for r in mine if r["status"] != "ok"]
-        if bad:
-            summary.append({"model": label, "status": bad[0]["status"], "reason": bad[0]["reason"]})
-            if verbose:
-                print(f"compare: {label} {bad[0]['status']}: {bad[0]['reason']}", file=sys.stderr)
-            continue
-        preds = [p for r in mine for p in r["predictions"]]
-        ev = evaluate(None, pooled, predictions=preds)
-        preds_by_model[label] = preds
-        sse = np.array([np.sum((u.trajectory - p) ** 2) for u, p in zip(pooled, preds)])
-        cnt = np.array([u.trajectory.size for u in pooled], dtype=float)
-        lo, hi = bootstrap_rmse_ci(sse, cnt, n_boot=n_boot, random_state=random_state)
-        predict_s = sum(r["predict_seconds"] for r in mine)
-        summary.append({
-            "model": label, "rmse": ev.rmse, "rmse_ci_low": lo, "rmse_ci_high": hi, "pearson_r": ev.pearson_r,
-            "fit_seconds": float(np.mean([r["fit_seconds"] for r in mine])),
-            "predict_us_per_phone": 1e6 * predict_s / sum(r["n_phones"] for r in mine),
-            "frames_per_second": sum(r["n_frames"] for r in mine) / max(predict_s, 1e-12),
-            "n_utterances": len(pooled), "status": "ok", "reason": "",
-            "_utt_rmse": np.array([row["rmse"] for row in ev.per_utterance])})
-        for c, e, rr in zip(ev.channels, ev.rmse_per_channel, ev.pearson_per_channel):
-            per_channel.append({"model": label, "channel": c, "rmse": float(e), "pearson_r": float(rr)})
-        for k, row in zip(fold_of, ev.per_utterance):
-            per_utt.append({"model": label, "fold": k, **row})
-
-    ok = [r for r in summary if r["status"] == "ok"]
-    best = min(ok, key=lambda r: r["rmse"])["model"] if ok else None
-    others = [r for r in ok if r["model"] != best]
-    if best is not None:
-        ref = next(r for r in ok if r["model"] == best)["_utt_rmse"]
-        p = [_wilcoxon(r["_utt_rmse"], ref) for r in others]
-        for r, pv, ph in zip(others, p, holm(p) if p else []):
-            r["wilcoxon_p"], r["wilcoxon_p_holm"] = pv, float(ph)
-    for r in ok:
-        r.pop("_utt_rmse")
-        r.setdefault("wilcoxon_p", "")
-        r.setdefault("wilcoxon_p_holm", "")
-    summary.sort(key=lambda r: (r["status"] != "ok", r.get("rmse", 0.0)))
-
-    example = {}
-    if preds_by_model:
-        u = pooled[0]
-        example = {"utterance": u.name, "frame_rate": u.frame_rate, "channels": list(u.channels),
-                   "truth": np.asarray(u.trajectory), "predictions": {m: p[0] for m, p in preds_by_model.items()}}
-    result = ComparisonResult(summary=summary, per_channel=per_channel, per_utterance=per_utt, best=best,
-                              corpus=where, example=example)
+    plan = plan_comparison(models, train, test, cv, out, test_size=test_size, random_state=random_state,
+                           unknown_phone=unknown_phone, channels=channels)
+    results = run_tasks(plan, n_jobs, progress=progress)
+    result = score_results(plan, results, n_boot=n_boot, random_state=random_state, verbose=verbose)
     if out is not None:
         result.write(out)
     return result
 
 
 # -- demo ---------------------------------------------------------------------
-DEMO_CHANNELS = {"vtl": ("JA", "LP", "LD", "TCX", "TCY", "TTY")}  # jaw, lips, tongue body and tip
+#: The full demo's channels (``dam demo --full``): jaw, lips, tongue body and tip.
+DEMO_CHANNELS = {"vtl": ("JA", "LP", "LD", "TCX", "TCY", "TTY")}
+#: The quick demo (``dam demo``, under a minute on two cores): jaw angle, lip distance, tongue tip height,
+#: the first 5 of the 10 training minutes, and every classical model but the second decision tree.
+QUICK_DEMO = {"vtl": {"channels": ("JA", "LD", "TTY"), "train_minutes": 5.0,
+                      "models": DEMO_MODELS[:-1]}}
 
 
-def run_demo(out_dir=None, *, corpus: str | None = None, models=DEMO_MODELS, n_jobs: int = 1,
-             channels="demo", verbose: int = 1) -> ComparisonResult:
-    """The ``dam demo`` comparison on a bundled corpus; prints the table.
+def demo_plan(corpus: str = "vtl", *, full: bool = False, channels="demo") -> dict:
+    """What ``dam demo`` runs on ``corpus``: ``models``, ``channels``, ``train_minutes`` and a
+    one-paragraph ``description`` said up front.
 
-    ``vtl`` by default: trained on its train part, scored on its held-out
-    test part (disjoint words), on six representative channels (jaw, lips,
-    tongue body and tip; ``channels=None`` for all 19). Models whose
-    dependencies are missing are listed as skipped.
+    The quick plan (the default; ``QUICK_DEMO``) takes under a minute on two cores
+    (``benchmarks/results/compare_demo.md``); ``full=True`` is every demo model on the six
+    demo channels and all the training data (about 3 minutes).
+    """
+    import dam.datasets as datasets
+    ds = datasets._get(corpus)
+    quick = None if full else QUICK_DEMO.get(corpus)
+    models = quick["models"] if quick else DEMO_MODELS
+    if channels == "demo":
+        channels = quick["channels"] if quick else DEMO_CHANNELS.get(corpus)
+    minutes = quick["train_minutes"] if quick else None
+    names = [m if isinstance(m, str) else m[0] for m in models]
+    part = (f"the {'first %g minutes of the ' % minutes if minutes else ''}training part" if "test" in ds.splits
+            else "three quarters of the utterances")
+    held = "its held-out test part (words never seen in training)" if "test" in ds.splits else "the other quarter"
+    cost = {("vtl", True): f"About a minute on two cores (--full: all the training data, six channels, "
+                           f"{len(DEMO_MODELS)} models, about 3 minutes).",
+            ("vtl", False): "About 3 minutes on two cores."}.get((corpus, quick is not None),
+                                                                 "The progress line shows the time left.")
+    text = (f"dam demo: fits {len(models)} models ({', '.join(names)}) on {part} of the bundled corpus "
+            f"'{corpus}' ({'channels ' + ', '.join(channels) if channels else 'all channels'}), scores them on "
+            f"{held} and prints the comparison table. {cost}")
+    return {"models": models, "channels": channels, "train_minutes": minutes, "description": text}
+
+
+def _first_minutes(corpus: Corpus, minutes: float | None) -> Corpus:
+    if minutes is None:
+        return corpus
+    n, total = 0, 0.0
+    while n < len(corpus) and total < 60.0 * minutes:
+        total += corpus[n].duration
+        n += 1
+    return corpus.subset(range(n))
+
+
+def run_demo(out_dir=None, *, corpus: str | None = None, models=None, n_jobs: int = 1,
+             channels="demo", full: bool = False, verbose: int = 1) -> ComparisonResult:
+    """The ``dam demo`` comparison on a bundled corpus (:func:`demo_plan`); prints the table.
+
+    ``vtl`` by default: trained on its train part (the quick plan: its first 5 minutes), scored
+    on its held-out test part (disjoint words), on the plan's channels (``channels=None`` for
+    all 19). Models whose dependencies are missing are listed as skipped.
     """
     import dam.datasets as datasets
     name = corpus or "vtl"
     ds = datasets._get(name)
-    if channels == "demo":
-        channels = DEMO_CHANNELS.get(name)
+    plan = demo_plan(name, full=full, channels=channels)
+    models = plan["models"] if models is None else models
     if verbose:
+        print(plan["description"], file=sys.stderr)
+        print(file=sys.stderr)
         print(datasets.describe(name), file=sys.stderr)
-        if channels:
-            print(f"channels: {', '.join(channels)} (of the corpus's own; --all-channels for every one)",
-                  file=sys.stderr)
         print(file=sys.stderr)
     if "test" in ds.splits:
-        res = compare(models, f"{name}:train", f"{name}:test", n_jobs=n_jobs, out=out_dir,
-                      channels=channels, verbose=verbose)
+        train = _first_minutes(datasets.load(name, "train"), plan["train_minutes"])
+        res = compare(models, train, f"{name}:test", n_jobs=n_jobs, out=out_dir,
+                      channels=plan["channels"], verbose=verbose)
     else:
-        res = compare(models, name, n_jobs=n_jobs, out=out_dir, channels=channels, verbose=verbose)
+        res = compare(models, name, n_jobs=n_jobs, out=out_dir, channels=plan["channels"], verbose=verbose)
     print(res.table())
     return res

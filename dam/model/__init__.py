@@ -21,9 +21,9 @@ from __future__ import annotations
 
 from dam._lazy import lazy_exports
 
-_EXPORTS = {"DAM": ".estimator", "DAMM0": ".estimator", "inspect_report": ".inspection"}
+_EXPORTS = {"DAM": ".estimator", "DAMM0": ".estimator", "DAMPaper": ".estimator", "inspect_report": ".inspection"}
 _SUBMODULES = ("dominance", "animeme", "modes", "estep", "mstep", "em", "astar", "synthesis", "estimator",
                "inspection")
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
-__all__ = ["DAM", "DAMM0", "inspect_report"]
+__all__ = ["DAM", "DAMM0", "DAMPaper", "inspect_report"]

@@ -133,4 +133,5 @@ def boundary_derivatives(coef, order: int = 2) -> np.ndarray:
     """
     coef = np.asarray(coef, dtype=float)
     E = _edge_derivative_matrix(coef.shape[-2] - 1, order)
-    return np.einsum("ekm,...mc->...ekc", E, coef)
+    out = E.reshape(-1, E.shape[-1]) @ coef              # (..., 2 (order + 1), C): matmul broadcasts
+    return out.reshape(coef.shape[:-2] + E.shape[:2] + coef.shape[-1:])

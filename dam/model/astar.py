@@ -27,9 +27,11 @@ heuristic ``h(j) = sum_{k>j} min_g (w_c E_c(k, g) + min_g' w_s E_s(g', g))``
 (every later layer costs at least its cheapest node plus the cheapest edge into
 it); :func:`viterbi` (dynamic programming) and :func:`exhaustive`
 (enumeration) are the references the tests hold it to. Synthesis runs
-:func:`astar_blocks`: the graph splits at single-mode phones into independent
-blocks, short blocks are costed in full for all blocks at once, long ones go
-to :func:`astar`.
+:func:`free_path`, the same optimum by exact dynamic programming: the graph
+splits at single-mode phones into independent blocks, and all blocks advance
+together, one min-plus product per layer (:func:`chain_dp` is the plain
+one-chain form). :class:`ModeGraph` holds the fixed part of a fitted model's
+graph, built once at the end of fit and at load.
 
 numpy only: this module is on the load + predict path of a saved model.
 """
@@ -41,13 +43,9 @@ import itertools
 import numpy as np
 
 __all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "pad_layers", "astar",
-           "astar_blocks", "free_path", "viterbi", "exhaustive", "path_cost"]
+           "astar_blocks", "free_path", "chain_dp", "viterbi", "exhaustive", "path_cost", "ModeGraph"]
 
 BOUNDARY = "#"
-
-# Blocks of free layers with at most this many paths are costed in full at
-# once (vectorized); longer ones are searched by A*.
-ENUMERATE_MAX_PATHS = 1024
 
 
 def context_counts(labels_per_utt, modes_per_utt, n_modes: dict) -> dict:
@@ -133,9 +131,14 @@ def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev, dur_
     k = np.arange(edge_prev.shape[-2])[:, None]
     dp = np.asarray(dur_prev, dtype=float)[..., None, None, None]
     dc = np.asarray(dur_cur, dtype=float)[..., None, None, None]
-    p = edge_prev * (tau / dp) ** k / scale
-    c = edge_cur * (tau / dc) ** k / scale
-    return ((p[..., :, None, :, :] - c[..., None, :, :, :]) ** 2).sum(axis=(-2, -1))
+    p = edge_prev * ((tau / dp) ** k / scale)
+    c = edge_cur * ((tau / dc) ** k / scale)
+    p = p.reshape(p.shape[:-2] + (-1,))                 # (..., G_prev, 3 C)
+    c = c.reshape(c.shape[:-2] + (-1,))
+    # |p - c|^2 = |p|^2 + |c|^2 - 2 p.c: one matrix product instead of a (G, G, 3, C) difference
+    cost = (p * p).sum(axis=-1)[..., :, None] + (c * c).sum(axis=-1)[..., None, :] \
+        - 2.0 * (p @ np.swapaxes(c, -1, -2))
+    return np.maximum(cost, 0.0)
 
 
 def path_cost(path, node_costs, edge_costs) -> float:
@@ -233,15 +236,12 @@ def astar(node_costs, edge_costs):
 
 
 def astar_blocks(nodes: np.ndarray, edges: np.ndarray):
-    """:func:`astar` on the blocks between layers that have a single node.
+    """The cheapest path and its cost, split at the layers that have a single node.
 
     A layer with one node lies on every path, so the cheapest path splits
-    there into independent searches (exact, and most phones have one mode).
-    Short blocks of free layers (at most :data:`ENUMERATE_MAX_PATHS` paths:
-    typically one or two multi-mode phones between single-mode ones) are
-    solved for all blocks at once by costing every path of each (what A*
-    would settle on, without a Python loop per node); longer blocks are
-    searched by :func:`astar`.
+    there into independent blocks (exact, and most phones have one mode);
+    :func:`free_path` solves all blocks together by dynamic programming.
+    Same optimum as :func:`astar` (the tests hold them to each other).
 
     Parameters
     ----------
@@ -266,6 +266,13 @@ def astar_blocks(nodes: np.ndarray, edges: np.ndarray):
 def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     """The cheapest path of :func:`astar_blocks` as an array, without its cost.
 
+    Exact dynamic programming over the chain, vectorised across blocks: the
+    graph splits at single-node layers into independent blocks of free
+    layers, each anchored by its forced neighbours; all blocks advance one
+    layer per step together (a min-plus product each), so an utterance costs
+    as many numpy steps as its longest block has layers (typically 1-3),
+    not one Python step per node as A* does.
+
     ``free`` (bool, shape (n_layers,)), if given, marks the layers with more
     than one node; edges between two other layers are never read (the
     caller may leave them unset).
@@ -274,45 +281,201 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     path = np.argmin(nodes, axis=1)          # the only node of a forced layer
     if free is None:
         free = np.isfinite(nodes).sum(axis=1) > 1
-    idx = np.nonzero(free)[0]
+    idx = np.flatnonzero(free)
     if idx.size == 0:
         return path
-    cut = np.nonzero(np.diff(idx) != 1)[0]
+    cut = np.flatnonzero(np.diff(idx) != 1)
     first = idx[np.concatenate(([0], cut + 1))]
     last = idx[np.concatenate((cut, [idx.size - 1]))]
     L = last - first + 1
-    G = nodes.shape[1]
-    small = np.power(float(G), L) <= ENUMERATE_MAX_PATHS
-    for n in set(L[small].tolist()):
-        a = first[small & (L == n)]
-        path[a[:, None] + np.arange(n)] = _enumerate_blocks(nodes, edges, path, a, n)
-    for a, b in zip(first[~small], last[~small]):
-        lo, hi = max(a - 1, 0), min(b + 2, J)   # the forced neighbours anchor the block
-        path[lo:hi], _ = astar(nodes[lo:hi], edges[lo:hi - 1])
+    acc = nodes[first]                                        # (n_blocks, G): fancy indexing copies
+    before = first > 0
+    acc[before] += edges[first[before] - 1, path[first[before] - 1], :]
+    n_max = int(L.max())
+    back = []
+    for k in range(1, n_max):
+        act = np.flatnonzero(L > k)
+        j = first[act] + k
+        tot = acc[act][:, :, None] + edges[j - 1]             # (n_act, G_prev, G)
+        arg = tot.argmin(axis=1)
+        back.append((act, arg))
+        acc[act] = np.take_along_axis(tot, arg[:, None, :], axis=1)[:, 0, :] + nodes[j]
+    after = last + 1 < J
+    acc[after] += edges[last[after], :, path[last[after] + 1]]
+    path[last] = acc.argmin(axis=1)
+    for k in range(n_max - 1, 0, -1):
+        act, arg = back[k - 1]
+        j = first[act] + k
+        path[j - 1] = arg[np.arange(act.size), path[j]]
     return path
 
 
-def _enumerate_blocks(nodes, edges, path, a, n):
-    """Cheapest modes of blocks of ``n`` free layers starting at ``a`` (shape (n_blocks,)),
-    each between forced layers (or the graph's ends), by costing all G^n paths at once.
+def chain_dp(nodes: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Cheapest path through a chain of layers by exact dynamic programming, vectorised over modes.
+
+    The same optimum as :func:`astar` (the tests hold them to each other and
+    to :func:`exhaustive`): the graph is a chain, so the cheapest cost of
+    reaching every node of layer ``j`` is a min-plus product of layer
+    ``j - 1``'s with the ``(G, G)`` edge costs; one numpy step per layer, no
+    priority queue.
+
+    Parameters
+    ----------
+    nodes : ndarray, shape (n_layers, G_max)
+        Node costs, +inf for missing nodes.
+    edges : ndarray, shape (n_layers - 1, G_max, G_max)
 
     Returns
     -------
-    ndarray of int, shape (n_blocks, n)
+    ndarray of int, shape (n_layers,)
     """
     J, G = nodes.shape
-    nb = len(a)
-    c = nodes[a].copy()                                       # (nb, G)
-    before = a > 0
-    c[before] += edges[a[before] - 1, path[a[before] - 1], :]
-    for k in range(1, n):                                     # c: (nb, G, ..., G), k axes of modes
-        shape = (nb,) + (1,) * (k - 1) + (G, G)
-        c = c[..., None] + edges[a + k - 1].reshape(shape) + nodes[a + k].reshape((nb,) + (1,) * k + (G,))
-    after = a + n < J
-    out = edges[a[after] + n - 1, :, path[a[after] + n]]     # (n_after, G)
-    c[after] += out.reshape((-1,) + (1,) * (n - 1) + (G,))
-    best = np.argmin(c.reshape(nb, -1), axis=1)
-    return np.stack(np.unravel_index(best, (G,) * n), axis=1)
+    if J == 0:
+        return np.zeros(0, dtype=np.int64)
+    back = np.empty((max(J - 1, 0), G), dtype=np.int64)
+    acc = nodes[0]
+    cols = np.arange(G)
+    for j in range(1, J):
+        tot = acc[:, None] + edges[j - 1]
+        arg = tot.argmin(axis=0)
+        back[j - 1] = arg
+        acc = tot[arg, cols] + nodes[j]
+    path = np.empty(J, dtype=np.int64)
+    path[-1] = int(np.argmin(acc))
+    for j in range(J - 2, -1, -1):
+        path[j] = back[j, path[j + 1]]
+    return path
+
+
+class ModeGraph:
+    """The fixed part of a fitted DAM's animeme graph, built once (at the end of fit and at load).
+
+    Holds what does not change between utterances: the phone index, every
+    phone's global mode range, and the training context counts behind
+    ``E_c`` as dense arrays (unigram, left and right bigram; seen trigram
+    contexts sorted by code), so the data term of a whole utterance is a few
+    array lookups. It holds no animeme: ``E_s`` is computed from the model's
+    current ``coef_`` on every call, and ``w_c``, ``w_s`` and the smoothing
+    are arguments, so changing them (or ``coef_`` in place) never leaves
+    anything stale. Rebuild it (:meth:`dam.model.DAM.select_modes` does not)
+    after editing ``phone_modes_`` or ``context_counts_`` by hand.
+
+    Parameters
+    ----------
+    phone_modes : dict str -> (first global mode, number of modes)
+    context_counts : dict
+        As :func:`context_counts` returns.
+
+    Examples
+    --------
+    >>> g = ModeGraph({"a": [0, 2], "b": [2, 1]}, context_counts([["a", "b", "a"]], [[0, 0, 1]], {"a": 2, "b": 1}))
+    >>> pid, first, count = g.layers(["a", "b", "a"])
+    >>> nll, level = g.node_costs(pid, count, alpha=0.5)
+    >>> nll.shape, level.tolist()          # both "a"s were seen in their trigram contexts
+    ((3, 2), [0, 2, 0])
+    """
+
+    LEVELS = ("trigram", "bigram", "unigram")
+
+    def __init__(self, phone_modes: dict, context_counts: dict):
+        names = list(phone_modes)
+        self.names = names
+        self.index = {p: i for i, p in enumerate(names)}
+        fc = np.array([phone_modes[p] for p in names], dtype=np.int64).reshape(-1, 2)
+        self.first, self.count = fc[:, 0].copy(), fc[:, 1].copy()
+        P, B = len(names), len(names)                # context index B: the utterance edge
+        G = int(self.count.max()) if P else 1
+        self.G = G
+        ctx = {**self.index, BOUNDARY: B}
+        self.unigram = np.zeros((P, G))
+        self.left = np.zeros((P, B + 1, G))
+        self.right = np.zeros((P, B + 1, G))
+        codes, rows = [], []
+        for p, st in (context_counts or {}).items():
+            i = self.index.get(p)
+            if i is None or self.count[i] < 2:
+                continue
+            g = self.count[i]
+            self.unigram[i, :g] = st["unigram"][:g]
+            for side, arr in (("left", self.left), ("right", self.right)):
+                for q, c in st[side].items():
+                    if q in ctx:
+                        arr[i, ctx[q], :g] = c[:g]
+            for L, byR in st["trigram"].items():
+                for R, c in byR.items():
+                    if L in ctx and R in ctx and sum(c) > 0:
+                        codes.append((i * (B + 1) + ctx[L]) * (B + 1) + ctx[R])
+                        row = np.zeros(G)
+                        row[:g] = c[:g]
+                        rows.append(row)
+        order = np.argsort(codes, kind="stable") if codes else np.zeros(0, dtype=np.int64)
+        self.tri_codes = np.asarray(codes, dtype=np.int64)[order]
+        self.tri_counts = np.asarray(rows, dtype=float).reshape(-1, G)[order]
+        self.left_seen = self.left.sum(axis=2) > 0
+        self.right_seen = self.right.sum(axis=2) > 0
+
+    def layers(self, labels):
+        """Phone index, first global mode and number of modes of every segment (labels must be known)."""
+        pid = np.fromiter((self.index[p] for p in labels), dtype=np.int64, count=len(labels))
+        return pid, self.first[pid], self.count[pid]
+
+    def node_costs(self, pid: np.ndarray, count: np.ndarray, alpha: float):
+        """``E_c`` of every mode of every segment, and its back-off level.
+
+        Returns
+        -------
+        nll : ndarray, shape (n_segments, G_max)
+            Negative log-likelihoods as :func:`mode_nll` gives them (0 for a
+            single-mode phone), +inf for modes a phone does not have.
+        level : ndarray of int, shape (n_segments,)
+            Index into :attr:`LEVELS`.
+        """
+        J, G = len(pid), self.G
+        nll = np.zeros((J, G))
+        level = np.full(J, 2)
+        multi = np.flatnonzero(count > 1)
+        if multi.size:
+            B = len(self.names)
+            ctx = np.concatenate(([B], pid, [B]))
+            p, L, R = pid[multi], ctx[multi], ctx[multi + 2]
+            g = count[multi][:, None].astype(float)
+
+            def smoothed(c):
+                return (c + alpha) / (c.sum(axis=1, keepdims=True) + alpha * g)
+            prob = smoothed(self.unigram[p])
+            ls, rs = self.left_seen[p, L], self.right_seen[p, R]
+            bi = ls | rs
+            if bi.any():
+                both = (ls[:, None] * smoothed(self.left[p, L]) + rs[:, None] * smoothed(self.right[p, R]))
+                prob[bi] = both[bi] / (ls + rs)[bi, None]
+                level[multi[bi]] = 1
+            if self.tri_codes.size:
+                code = (p * (B + 1) + L) * (B + 1) + R
+                pos = np.minimum(np.searchsorted(self.tri_codes, code), self.tri_codes.size - 1)
+                hit = self.tri_codes[pos] == code
+                if hit.any():
+                    tc = self.tri_counts[pos[hit]]
+                    prob[hit] = (tc + alpha) / (tc.sum(axis=1, keepdims=True) + alpha * g[hit])
+                    level[multi[hit]] = 0
+            with np.errstate(divide="ignore"):
+                nll[multi] = -np.log(prob)
+        nll[np.arange(G) >= count[:, None]] = np.inf
+        return nll, level
+
+    def edge_costs(self, first, count, durations, coef, joints, tau: float, scale) -> np.ndarray:
+        """``E_s`` at ``joints`` (joint j: segment j to j + 1), shape (len(joints), G_max, G_max),
+        +inf to or from a missing mode; the animemes' edges from ``coef`` (n_modes, M + 1, C)."""
+        from dam.model.animeme import boundary_derivatives
+        G = self.G
+        idx = first[:, None] + np.minimum(np.arange(G), count[:, None] - 1)
+        d = np.asarray(durations, dtype=float)
+        prev = boundary_derivatives(coef[idx[joints]], order=2)[:, :, 1]       # (n_joints, G, 3, C) at t = 1
+        cur = boundary_derivatives(coef[idx[joints + 1]], order=2)[:, :, 0]    # at t = 0
+        cost = smoothness_costs(prev, cur, d[joints], d[joints + 1], tau, scale)
+        missing = np.arange(G) >= count[:, None]
+        cost[missing[joints]] = np.inf
+        cost.transpose(0, 2, 1)[missing[joints + 1]] = np.inf
+        return cost
 
 
 def viterbi(node_costs, edge_costs):

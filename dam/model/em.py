@@ -91,7 +91,7 @@ def fitted_values_all(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, pr)
 
 def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float = 1e-6,
            tol: float = 1e-3, max_iter: int = 50, gn_steps: int = 1, verbose: int = 0,
-           fixed_sigma: bool = False, projected: bool = True, channels=None):
+           fixed_sigma: bool = False, projected: bool = True, channels=None, weights=None):
     """Fit every channel's animeme coefficients and sigmas.
 
     Parameters
@@ -109,7 +109,8 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
     gn_steps : int, default 1
         Gauss-Newton steps per M-step (the damping carries over between M-steps).
     verbose : int, default 0
-        > 0 shows a progress bar over channels on stderr (when it is a TTY).
+        > 1 prints every channel's iterations on stderr. Progress over channels
+        goes to :mod:`dam.progress` (shown by the command line; see ``progress.reporting``).
     fixed_sigma : bool, default False
         Only the first E-step (for tests and ablations).
     projected : bool, default True
@@ -119,6 +120,10 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         Channel names for the :class:`dam.base.ConvergenceWarning` (issued
         when a channel stops at ``max_iter`` with its last relative
         improvement still >= ``tol``); default "channel 0", "channel 1", ...
+    weights : ndarray, shape (n_rows, n_channels), optional
+        Weights of the squared residuals: 0 where a value is missing
+        (``Utterance.mask``), so missing frames are skipped exactly rather
+        than fitted at their interpolated values. Default: all 1.
 
     Returns
     -------
@@ -145,12 +150,17 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
     for s0 in starts:
         sig = np.full(occ.n_modes, s0)
         pr = pairs(occ, sig)
-        G, XtY = normal_equations(occ, sig, Y, pr)
         if lam is None:  # fixed for the whole fit, so every step minimises one objective
             lam = ridge_lambda(occ.n_rows, ridge)
-        A, _ = solve_normal_equations(G, XtY, lam)
+        if weights is None:
+            G, XtY = normal_equations(occ, sig, Y, pr)
+            A, _ = solve_normal_equations(G, XtY, lam)
+        else:  # each channel has its own missing frames, hence its own normal equations
+            A = np.column_stack([solve_normal_equations(*normal_equations(occ, sig, Y[:, c], pr, weights[:, c]), lam)[0]
+                                 for c in range(n_ch)])
         R = Y - fitted_values_all(occ, A.reshape(occ.n_modes, M1, n_ch), sig, pr)
-        obj = (np.sum(R ** 2, axis=0) + lam * np.sum(A * A, axis=0)) / occ.n_rows
+        R2 = R ** 2 if weights is None else weights * R ** 2
+        obj = (np.sum(R2, axis=0) + lam * np.sum(A * A, axis=0)) / occ.n_rows
         better = obj < best
         best[better] = obj[better]
         A0[:, :, better] = A.reshape(occ.n_modes, M1, n_ch)[:, :, better]
@@ -160,11 +170,11 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
     curves, n_iter, converged = [], np.zeros(n_ch, dtype=int), np.zeros(n_ch, dtype=bool)
     unconverged = []     # (channel, last relative improvement) stopped by max_iter
 
-    from tqdm.auto import tqdm
-    bar = tqdm(range(n_ch), desc="DAM EM (channels)", file=sys.stderr, leave=False,
-               disable=not (verbose and sys.stderr.isatty()))
-    for c in bar:
+    from dam.progress import track
+    for c in track(range(n_ch), "DAM EM", unit="channel",
+                   labels=None if channels is None else [str(ch) for ch in channels]):
         y = Y[:, c]
+        w = None if weights is None else weights[:, c]
         a = A0[:, :, c]
         s = sigma[:, c].copy()
         mon = ConvergenceMonitor(tol, max_iter)
@@ -172,12 +182,13 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         mu = 1e-3
         while not fixed_sigma and not mon.done:
             s, a, obj, mu = gauss_newton_sigma(occ, y, a, s, lam=lam, projected=projected,
-                                               n_steps=gn_steps, mu=mu)
+                                               n_steps=gn_steps, mu=mu, weights=w)
             if not projected:  # the E-step (the projected M-step re-solves a itself)
                 pr = pairs(occ, s)
-                G, Xty = normal_equations(occ, s, y, pr)
+                G, Xty = normal_equations(occ, s, y, pr, w)
                 a = solve_normal_equations(G, Xty, lam)[0].reshape(occ.n_modes, M1)
-                obj = float(np.sum((y - fitted_values(occ, a, s, pr)[0]) ** 2) + lam * np.sum(a * a))
+                r = y - fitted_values(occ, a, s, pr)[0]
+                obj = float(np.sum(r * r if w is None else w * r * r) + lam * np.sum(a * a))
             mon.iter += 1
             mon.report(obj / occ.n_rows)
         coef[:, :, c] = a

@@ -153,27 +153,36 @@ def design_values(occ: Occurrences, pr):
     return vals, cols
 
 
-def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray):
-    """``Z^T Z`` and ``Z^T targets`` of a sparse matrix, utterance by utterance.
+# gram() forms Z in dense blocks of this many consecutive rows (frames): each block
+# touches only the modes whose dominance reaches it, so the work and memory are
+# linear in the corpus (or utterance) length, whatever the utterances' lengths.
+GRAM_ROWS = 128
+
+
+def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray, weights=None):
+    """``Z^T Z`` and ``Z^T targets`` of a sparse matrix, block of rows by block of rows.
 
     ``Z`` has one or more column blocks; block ``b`` has ``w_b`` columns per
     mode, and pair ``p`` adds ``vals_b[p, m]`` at row ``row[p]``, column
     ``base_b + mode(p) * w_b + m`` (entries of one mode's occurrences that meet
-    in a frame add up, as in Eq. 7). A frame only meets the occurrences of its
-    own utterance, so each utterance's block of ``Z`` is small and dense: it is
-    formed, multiplied by BLAS and added into the result.
-    ``benchmarks/bench_dam.py`` compares it with scipy's sparse ``Z.T @ Z``
-    (faster when the dominance reaches far, slower when it is short).
+    in a frame add up, as in Eq. 7). Dominance is local, so a block of
+    :data:`GRAM_ROWS` consecutive frames meets only the few modes of the
+    phones around it: its slice of ``Z`` is small and dense; it is formed,
+    multiplied by BLAS and added into the result. Time and memory grow
+    linearly with the number of frames, also for one long utterance.
+    ``benchmarks/bench_dam.py`` compares it with scipy's sparse ``Z.T @ Z``.
 
     Parameters
     ----------
     occ : Occurrences
     k, row : ndarray of int, shape (n_pairs,)
-        Occurrence and row of every pair (pairs grouped by occurrence, as
-        :func:`pairs` returns them).
+        Occurrence and row of every pair.
     blocks : list of (vals, base)
         ``vals`` of shape (n_pairs, w_b); ``base`` the block's first global column.
     targets : ndarray, shape (n_rows,) or (n_rows, n_targets)
+    weights : ndarray, shape (n_rows,), optional
+        Row weights ``w``: returns ``Z^T W Z`` and ``Z^T W targets`` (0 drops
+        a row: a frame whose value is missing, ``Utterance.mask``).
 
     Returns
     -------
@@ -182,43 +191,53 @@ def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray):
     Zty : ndarray, shape (n_cols, n_targets)
     """
     targets = np.asarray(targets, dtype=float).reshape(occ.n_rows, -1)
-    modes_u, local, utt = occ.local_modes
     n_cols = max(base + occ.n_modes * v.shape[1] for v, base in blocks)
     ZtZ = np.zeros((n_cols, n_cols))
     Zty = np.zeros((n_cols, targets.shape[1]))
-    L = np.array([len(m) for m in modes_u])
-    width = L * sum(v.shape[1] for v, _ in blocks)        # local columns per utterance
-    u = utt[k]
-    r0 = occ.offset[k]
-    lm = local[k]
-    flat, off = [], np.zeros(len(L), dtype=np.int64)
+    if len(k) == 0:
+        return ZtZ, Zty
+    R = GRAM_ROWS
+    n_chunks = (occ.n_rows + R - 1) // R
+    chunk = row // R
+    mode = occ.mode[k]
+    # the modes each chunk meets, numbered 0.. within the chunk
+    key, local = np.unique(chunk * occ.n_modes + mode, return_inverse=True)
+    key_chunk, key_mode = np.divmod(key, occ.n_modes)
+    first_key = np.searchsorted(key_chunk, np.arange(n_chunks + 1))
+    L = np.diff(first_key)                                    # modes met, per chunk
+    local = local - first_key[chunk]
+    wsum = sum(v.shape[1] for v, _ in blocks)
+    width = L * wsum                                          # local columns per chunk
+    flat, off = [], 0
     for vals, _ in blocks:
         w = vals.shape[1]
-        flat.append(((row - r0) * width[u] + off[u] + lm * w)[:, None] + np.arange(w))
-        off = off + L * w
+        flat.append(((row - chunk * R) * width[chunk] + off * L[chunk] + local * w)[:, None] + np.arange(w))
+        off += w
     flat = np.hstack(flat)
     wts = np.hstack([v for v, _ in blocks])
-    key = tuple((v.shape[1], base) for v, base in blocks)
-    cache = occ.__dict__.setdefault("_gram_columns", {})
-    if key not in cache:   # global column of every local column, per utterance
-        cache[key] = [np.concatenate([base + (m[:, None] * w + np.arange(w)).ravel() for w, base in key])
-                      for m in modes_u]
-    columns = cache[key]
-    bounds = np.searchsorted(k, occ.utterance_bounds)
-    for ui, (p0, p1) in enumerate(zip(bounds[:-1], bounds[1:])):
-        if p0 == p1:
-            continue
-        nf, wu = int(occ.n_frames[k[p0]]), int(width[ui])
-        Zl = np.bincount(flat[p0:p1].ravel(), weights=wts[p0:p1].ravel(), minlength=nf * wu).reshape(nf, wu)
-        g = columns[ui]
+    order = np.argsort(chunk, kind="stable")
+    flat, wts = flat[order], wts[order]
+    bounds = np.searchsorted(chunk[order], np.arange(n_chunks + 1))
+    for c in np.flatnonzero(np.diff(bounds)):
+        p0, p1 = bounds[c], bounds[c + 1]
+        r0, r1 = c * R, min((c + 1) * R, occ.n_rows)
+        wu = int(width[c])
+        Zl = np.bincount(flat[p0:p1].ravel(), weights=wts[p0:p1].ravel(), minlength=R * wu)
+        Zl = Zl.reshape(R, wu)[:r1 - r0]
+        m = key_mode[first_key[c]:first_key[c + 1]]
+        g = np.concatenate([base + (m[:, None] * w + np.arange(w)).ravel() for (v, base), w in
+                            zip(blocks, (v.shape[1] for v, _ in blocks))])
+        yl = targets[r0:r1]
+        if weights is not None:
+            sw = np.sqrt(weights[r0:r1])[:, None]
+            Zl, yl = Zl * sw, yl * sw
         ZtZ[np.ix_(g, g)] += Zl.T @ Zl
-        s0 = int(r0[p0])
-        Zty[g] += Zl.T @ targets[s0:s0 + nf]
+        Zty[g] += Zl.T @ yl
     return ZtZ, Zty
 
 
-def normal_equations(occ: Occurrences, sigma: np.ndarray, Y: np.ndarray, pr=None):
-    """``X^T X`` and ``X^T Y`` of Eq. (5) for one set of sigmas (see :func:`gram`).
+def normal_equations(occ: Occurrences, sigma: np.ndarray, Y: np.ndarray, pr=None, weights=None):
+    """``X^T X`` and ``X^T Y`` of Eq. (5) for one set of sigmas (see :func:`gram`; ``weights``: ``X^T W X``).
 
     Returns
     -------
@@ -227,7 +246,7 @@ def normal_equations(occ: Occurrences, sigma: np.ndarray, Y: np.ndarray, pr=None
     """
     pr = pairs(occ, sigma) if pr is None else pr
     vals, _ = design_values(occ, pr)
-    return gram(occ, pr[0], pr[1], [(vals, 0)], Y)
+    return gram(occ, pr[0], pr[1], [(vals, 0)], Y, weights)
 
 
 def design_matrix(occ: Occurrences, sigma: np.ndarray, pr=None):

@@ -72,7 +72,7 @@ def jacobian(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, parts=None):
     return J
 
 
-def _reduced(occ, y, sigma, lam):
+def _reduced(occ, y, sigma, lam, weights=None):
     """The objective with the coefficients re-solved at ``sigma`` (an E-step).
 
     Returns ``(objective, coef, fitted, factor)``: ``fitted`` as from
@@ -82,15 +82,20 @@ def _reduced(occ, y, sigma, lam):
     from dam.model.estep import normal_equations, pairs, solve_normal_equations
 
     pr = pairs(occ, sigma)
-    G, Xty = normal_equations(occ, sigma, y, pr)
+    G, Xty = normal_equations(occ, sigma, y, pr, weights)
     a, fac = solve_normal_equations(G, Xty[:, 0], lam)
     a = a.reshape(occ.n_modes, occ.degree + 1)
     cur = fitted_values(occ, a, sigma, pr)
-    r = y - cur[0]
-    return float(r @ r + lam * np.sum(a * a)), a, cur, fac
+    return _objective(y, cur[0], a, lam, weights), a, cur, fac
 
 
-def _products(occ, y, cur, coef, sigma, projected):
+def _objective(y, fitted, a, lam, weights=None) -> float:
+    """``sum_i w_i (y_i - fitted_i)^2 + lam ||a||^2`` (``w`` = 1 without weights)."""
+    r = y - fitted
+    return float((r @ r if weights is None else r @ (weights * r)) + lam * np.sum(a * a))
+
+
+def _products(occ, y, cur, coef, sigma, projected, weights=None):
     """``H = Jp^T Jp``, ``g = Jp^T f`` and, if projected, ``K = X^T Jp`` in one pass over the utterances."""
     from dam.model.estep import design_values, gram
 
@@ -101,7 +106,7 @@ def _products(occ, y, cur, coef, sigma, projected):
         blocks, off = [(jv[:, None], 0)], 0
     else:
         blocks, off = [(design_values(occ, (k, row, t, D))[0], 0), (jv[:, None], occ.n_coef)], occ.n_coef
-    ZtZ, Ztf = gram(occ, k, row, blocks, f)
+    ZtZ, Ztf = gram(occ, k, row, blocks, f, weights)
     H = ZtZ[off:, off:]
     g = Ztf[off:, 0]
     K = ZtZ[:off, off:] if projected else None
@@ -110,7 +115,7 @@ def _products(occ, y, cur, coef, sigma, projected):
 
 def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma: np.ndarray, *,
                        lam: float = 0.0, projected: bool = True, n_steps: int = 1, mu: float = 1e-3,
-                       rtol: float = 1e-6, max_tries: int = 8):
+                       rtol: float = 1e-6, max_tries: int = 8, weights=None):
     """Damped Gauss-Newton on log(sigma) for one channel.
 
     Two flavours of the same step:
@@ -146,6 +151,8 @@ def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma:
         Stop when a step improves the objective by less than this fraction.
     max_tries : int, default 8
         Rejected (damped-up) tries per step before giving up.
+    weights : ndarray, shape (n_rows,), optional
+        Row weights of the squared residuals (0 for a missing value).
 
     Returns
     -------
@@ -162,13 +169,13 @@ def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma:
     theta = np.log(np.clip(sigma, SIGMA_MIN, SIGMA_MAX))
     a = np.asarray(coef, dtype=float)
     if projected:
-        obj, a, cur, fac = _reduced(occ, y, np.exp(theta), lam)
+        obj, a, cur, fac = _reduced(occ, y, np.exp(theta), lam, weights)
     else:
         cur = fitted_values(occ, a, np.exp(theta))
-        obj = float(np.sum((y - cur[0]) ** 2) + lam * np.sum(a * a))
+        obj = _objective(y, cur[0], a, lam, weights)
     obj0 = obj
     for _ in range(n_steps):
-        H, g, K = _products(occ, y, cur, a, np.exp(theta), projected and fac is not None)
+        H, g, K = _products(occ, y, cur, a, np.exp(theta), projected and fac is not None, weights)
         # g = Jp^T f = -J^T f for the residual's Jacobian J = -Jp
         if K is not None:
             W = linalg.cho_solve(fac, K, check_finite=False)
@@ -187,11 +194,11 @@ def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma:
                 continue
             new_theta = np.clip(theta + delta, np.log(SIGMA_MIN), np.log(SIGMA_MAX))
             if projected:
-                new_obj, new_a, trial, new_fac = _reduced(occ, y, np.exp(new_theta), lam)
+                new_obj, new_a, trial, new_fac = _reduced(occ, y, np.exp(new_theta), lam, weights)
             else:
                 new_a, new_fac = a, None
                 trial = fitted_values(occ, a, np.exp(new_theta))
-                new_obj = float(np.sum((y - trial[0]) ** 2) + lam * np.sum(a * a))
+                new_obj = _objective(y, trial[0], a, lam, weights)
             if new_obj < obj:
                 accepted = True
                 gain = obj - new_obj

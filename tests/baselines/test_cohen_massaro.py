@@ -160,5 +160,27 @@ def test_long_recordings_are_synthesised_in_blocks_identically(monkeypatch):
     model = CohenMassaro(max_nfev=5).fit(_generated_corpus(n_utts=3))
     a = _generated_corpus(n_utts=1, seed=4)[0].alignment
     whole = model.predict(a)
-    monkeypatch.setattr(cm, "_BLOCK_VALUES", 5 * len(a))  # blocks of 5 frames
+    monkeypatch.setattr(cm, "BLOCK_FRAMES", 5)  # blocks of 5 frames, each with every segment within 30
     np.testing.assert_allclose(model.predict(a), whole, rtol=1e-12)
+
+
+def test_long_utterance_in_windowed_blocks_matches_the_dense_model(monkeypatch):
+    """Linear memory: blocks of frames see only nearby segments; the dense (frames x all segments)
+    weighted average, with every segment, gives the same trajectory."""
+    import baselines.cohen_massaro as cm
+    model = CohenMassaro(max_nfev=5).fit(_generated_corpus(n_utts=3))
+    parts = [u.alignment for u in _generated_corpus(n_utts=12, seed=5)]
+    labels, starts, ends, t = [], [], [], 0.0
+    for a in parts:                                  # one long utterance of ~12 phrases
+        labels += list(a.labels)
+        starts += list(a.starts + t)
+        ends += list(a.ends + t)
+        t += a.duration
+    long = Alignment(labels, starts, ends)
+    windowed = model.predict(long)
+    monkeypatch.setattr(cm, "BLOCK_FRAMES", 10 ** 9)
+    monkeypatch.setattr(cm, "NEIGHBOURS", 10 ** 9)
+    dense = model.predict(long)
+    assert len(long) > 60                       # many more segments than one block sees
+    err = np.abs(windowed - dense).max() / np.ptp(dense, axis=0).max()
+    assert err < 1e-4, err

@@ -9,9 +9,10 @@ import sys
 import numpy as np
 import pytest
 
-pytest.importorskip("jax")
-pytest.importorskip("equinox")
-pytest.importorskip("optax")
+# jax, equinox and optax are required for the test run (dam[test]; tests/conftest.py checks): no skipping here.
+import equinox  # noqa: E402, F401
+import jax  # noqa: E402, F401
+import optax  # noqa: E402, F401
 
 import dam  # noqa: E402
 from dam.corpus.data import Alignment, Corpus, Utterance  # noqa: E402

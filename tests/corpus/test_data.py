@@ -6,12 +6,20 @@ from dam import SILENCE, Alignment, Corpus, DataError, Utterance
 from dam.corpus.data import frame_labels
 
 
-def test_silence_spellings_and_gaps_become_silence():
+def test_silence_spellings_and_gaps_become_silence_merged():
     a = Alignment(["", "p", "SP", "aa", "pau"], [0.0, 0.1, 0.2, 0.35, 0.5], [0.1, 0.2, 0.3, 0.5, 0.6])
-    # the gap 0.3-0.35 becomes its own silence segment
-    assert a.labels == (SILENCE, "p", SILENCE, SILENCE, "aa", SILENCE)
-    np.testing.assert_allclose(a.starts, [0, 0.1, 0.2, 0.3, 0.35, 0.5])
-    assert a.n_frames(100) == 60
+    # the gap 0.3-0.35 is silence, merged with the "SP" before it into one pause
+    assert a.labels == (SILENCE, "p", SILENCE, "aa", SILENCE)
+    np.testing.assert_allclose(a.starts, [0, 0.1, 0.2, 0.35, 0.5])
+    np.testing.assert_allclose(a.ends, [0.1, 0.2, 0.35, 0.5, 0.6])
+    # frames at 0.00 .. 0.60 inclusive
+    assert a.n_frames(100) == 61
+
+
+def test_adjacent_silences_from_file_merge_into_one():
+    a = Alignment(["sil", "sp", "a", "pau", "", "sil"], [0, .1, .2, .3, .4, .45], [.1, .2, .3, .4, .45, .5])
+    assert a.labels == (SILENCE, "a", SILENCE)
+    np.testing.assert_allclose(np.c_[a.starts, a.ends], [[0, .2], [.2, .3], [.3, .5]])
 
 
 def test_leading_gap_is_silence_and_custom_silence_label():
@@ -21,8 +29,15 @@ def test_leading_gap_is_silence_and_custom_silence_label():
 
 def test_frame_convention():
     a = Alignment(["a", "b"], [0.0, 0.025], [0.025, 0.05])
-    # frames at 0, .01, .02 | .03, .04 -> 5 frames; frame 2 (t=.02) in "a", frame 3 (t=.03) in "b"
-    assert frame_labels(a, 100) == ["a", "a", "a", "b", "b"]
+    # frames at 0, .01, .02 | .03, .04, .05 -> 6 frames (t <= end); frame 2 (t=.02) in "a", 3 in "b"
+    assert frame_labels(a, 100) == ["a", "a", "a", "b", "b", "b"]
+    # n_frames counts frames at times <= end, robust to decimals
+    for fr in (100.0, 200.0, 400.9, 60.0):
+        for n in (2, 7, 123):
+            end = (n - 1) / fr
+            assert Alignment(["a"], [0], [end]).n_frames(fr) == n
+            assert Alignment(["a"], [0], [round(end, 6)]).n_frames(fr) == n      # as a TextGrid stores it
+            assert Alignment(["a"], [0], [end + 0.99 / fr]).n_frames(fr) == n
 
 
 @pytest.mark.parametrize("labels,starts,ends,field,problem", [
@@ -47,8 +62,57 @@ def _utt(n=30, channels=("a", "b"), end=0.3, **kw):
 def test_utterance_pads_alignment_with_trailing_silence_and_trims_one_frame():
     u = _utt(n=35)
     assert u.alignment.labels[-1] == SILENCE and u.alignment.n_frames(100) == 35
-    u = _utt(n=29)  # one frame short: the last segment is trimmed
+    assert u.alignment.ends[-1] == pytest.approx(0.34)     # the last frame time
+    u = _utt(n=29)  # two frames short: the last segment is trimmed to the last frame time
     assert u.alignment.n_frames(100) == 29 and u.alignment.labels[-1] == "aa"
+    assert u.alignment.ends[-1] == pytest.approx(0.28)
+
+
+@pytest.mark.parametrize("fr", [100.0, 400.9, 60.0])
+@pytest.mark.parametrize("n", [12, 30, 517])
+def test_alignment_ending_at_last_frame_time_is_kept_unpadded(fr, n):
+    """The issue's case: the alignment ends exactly at the last frame's time (i / frame_rate)."""
+    last = (n - 1) / fr
+    a = Alignment(["sil", "a", "sil"], [0, last / 3, 2 * last / 3], [last / 3, 2 * last / 3, last])
+    u = Utterance(a, np.zeros((n, 1)), fr, ["x"])
+    assert u.alignment is a and u.alignment.n_frames(fr) == n
+    # within one frame after it (e.g. the old convention, end = n / frame_rate - a bit): kept too
+    b = Alignment(a.labels, a.starts, np.r_[a.ends[:-1], last + 0.6 / fr])
+    assert Utterance(b, np.zeros((n, 1)), fr, ["x"]).alignment is b
+
+
+def test_sub_frame_gaps_and_overhangs_are_absorbed_not_segments():
+    fr = 100.0
+    # a trailing gap of 0.4 frame: the last segment grows to the last frame time
+    a = Alignment(["sil", "a"], [0, 0.1], [0.1, 0.286])
+    u = Utterance(a, np.zeros((30, 1)), fr, ["x"])
+    assert u.alignment.labels == ("sil", "a") and u.alignment.ends[-1] == pytest.approx(0.29)
+    # an overhang of exactly one frame (end = n / frame_rate, a writer's habit): trimmed, no new segment
+    a = Alignment(["sil", "a", "sil"], [0, 0.1, 0.29], [0.1, 0.29, 0.30])
+    u = Utterance(a, np.zeros((30, 1)), fr, ["x"])
+    assert u.alignment.labels == ("sil", "a") and u.alignment.ends[-1] == pytest.approx(0.29)
+    # a sub-frame pause between phones (and a leading one) is absorbed into the neighbour
+    a = Alignment(["a", "b", "c"], [0.004, 0.1, 0.205], [0.096, 0.2, 0.29])
+    assert a.labels == ("sil", "a", "sil", "b", "sil", "c")
+    u = Utterance(a, np.zeros((30, 1)), fr, ["x"])
+    assert u.alignment.labels == ("a", "b", "c")
+    np.testing.assert_allclose(np.c_[u.alignment.starts, u.alignment.ends], [[0, .1], [.1, .205], [.205, .29]])
+    # a real pause at the end (3 frames) extends the trailing silence instead of adding a second one
+    a = Alignment(["sil", "a", "sil"], [0, 0.1, 0.2], [0.1, 0.2, 0.26])
+    u = Utterance(a, np.zeros((30, 1)), fr, ["x"])
+    assert u.alignment.labels == ("sil", "a", "sil") and u.alignment.ends[-1] == pytest.approx(0.29)
+    for u in (u,):
+        assert u.alignment.n_frames(fr) == u.n_frames
+
+
+def test_edge_convention_round_trips_through_files(tmp_path):
+    from dam.corpus.io import load_corpus, save_corpus
+    fr = 100.0
+    a = Alignment(["sil", "a", "sil"], [0, 0.1, 0.2], [0.1, 0.2, 0.29])
+    c = Corpus([Utterance(a, np.arange(30.0)[:, None], fr, ["x"], name="u")])
+    save_corpus(c, tmp_path / "c")
+    back = load_corpus(tmp_path / "c")
+    assert back[0].alignment == a and back[0].n_frames == 30
 
 
 def test_utterance_errors():

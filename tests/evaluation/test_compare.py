@@ -30,6 +30,7 @@ def test_holm_by_hand():
 
 def test_scores_agree_with_scipy(result, corpora):
     from scipy.stats import pearsonr, wilcoxon
+
     from baselines.reference import PhoneMean, TargetInterpolation
     train, test = corpora
     truth = np.concatenate(test.trajectories)
@@ -99,10 +100,23 @@ def test_cross_validation_scores_every_utterance_once(corpora):
 
 
 def test_failed_model_is_reported_not_raised(corpora):
+    from baselines.reference import PhoneMean
     train, test = corpora
-    res = compare([("bad", "phone-mean", {"unknown_phone": "guess"}), "phone-mean"], train, test, verbose=0)
-    assert res.row("bad")["status"] == "failed" and "unknown_phone" in res.row("bad")["reason"]
-    assert res.best == "phone-mean"
+
+    class Diverges(PhoneMean):
+        def _fit(self, corpus):
+            raise FloatingPointError("diverged")
+
+    res = compare([("bad", Diverges()), "phone-mean"], train, test, verbose=0)
+    assert res.row("bad")["status"] == "failed" and "FloatingPointError: diverged" in res.row("bad")["reason"]
+    assert res.row("bad")["rmse"] is None and res.best == "phone-mean"
+
+
+def test_bad_parameters_are_refused_before_any_fit(corpora):
+    import dam
+    train, test = corpora
+    with pytest.raises(dam.InvalidParameterError, match="PhoneMean: parameter 'unknown_phone' is 'guess'"):
+        compare([("bad", "phone-mean", {"unknown_phone": "guess"}), "phone-mean"], train, test, verbose=0)
 
 
 def test_cli_compare(tmp_path, capsys):
@@ -125,3 +139,24 @@ def test_test_corpus_at_another_frame_rate_is_refused(corpora):
                               test.channels, name=u.name) for u in test])
     with pytest.raises(ValueError, match="frame rates differ"):
         compare(["phone-mean"], train, other, verbose=0)
+
+
+def test_the_four_steps_and_the_progress_callback(corpora):
+    """plan_comparison -> run_tasks -> score_results is compare(); progress sees every task once."""
+    from dam.evaluation.compare import ModelScore, TaskResult, plan_comparison, run_tasks, score_results
+    train, _ = corpora
+    models = ["phone-mean", "target-interpolation"]
+    plan = plan_comparison(models, train, cv=2)
+    assert [(t.label, t.fold) for t in plan.tasks] == [(m, k) for m in models for k in (0, 1)]
+    seen = []
+    results = run_tasks(plan, progress=lambda r, done, total: seen.append((r, done, total)))
+    assert all(isinstance(r, TaskResult) and r.status == "ok" for r in results)
+    assert sorted((r.model, r.fold) for r, _, _ in seen) == sorted((t.label, t.fold) for t in plan.tasks)
+    assert [d for _, d, _ in seen] == [1, 2, 3, 4] and {t for _, _, t in seen} == {4}
+    stepwise = score_results(plan, results, n_boot=100, verbose=0)
+    whole = compare(models, train, cv=2, n_boot=100, verbose=0)
+    for a, b in zip(stepwise.summary, whole.summary):
+        assert isinstance(a, ModelScore) and a.model == b.model and a.rmse == b.rmse == a["rmse"]
+        assert (a.rmse_ci_low, a.wilcoxon_p) == (b.rmse_ci_low, b.wilcoxon_p)
+    best = stepwise.row(stepwise.best)
+    assert best.wilcoxon_p is None and best.get("wilcoxon_p", "") == ""  # not tested against itself

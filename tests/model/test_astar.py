@@ -3,9 +3,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-import dam.model.astar
-from dam.model.astar import (BOUNDARY, astar, astar_blocks, context_counts, exhaustive, free_path, mode_nll,
-                       pad_layers, path_cost, smoothness_costs, viterbi)
+from dam.model.astar import (BOUNDARY, ModeGraph, astar, astar_blocks, chain_dp, context_counts, exhaustive,
+                             free_path, mode_nll, pad_layers, path_cost, smoothness_costs, viterbi)
 
 
 def _graph(seed, n_layers, max_modes, scale_edges=1.0):
@@ -42,18 +41,19 @@ def test_astar_equals_dynamic_programming_on_long_random_graphs(seed, n_layers, 
     assert p3 == p2
 
 
-@pytest.mark.parametrize("max_paths", [1, 64, 4096])
-def test_block_search_equals_dynamic_programming_whichever_solves_the_blocks(monkeypatch, max_paths):
-    # 1: every block goes to A*; 64 and 4096: short blocks costed in full, long ones to A*
-    monkeypatch.setattr(dam.model.astar, "ENUMERATE_MAX_PATHS", max_paths)
-    rng = np.random.default_rng(max_paths)
-    for seed in range(25):
-        n_layers = int(rng.integers(1, 40))
-        nodes, edges = _graph(seed, n_layers, 4)
+@pytest.mark.parametrize("max_modes", [2, 4, 7])
+def test_block_dynamic_program_equals_astar_and_dynamic_programming(max_modes):
+    """free_path (what synthesis runs: all blocks advance together) against A* and viterbi, many shapes."""
+    rng = np.random.default_rng(max_modes)
+    for seed in range(40):
+        n_layers = int(rng.integers(1, 60))
+        nodes, edges = _graph(seed, n_layers, max_modes)
         n_pad, e_pad = pad_layers(nodes, edges)
         p1, c1 = astar_blocks(n_pad, e_pad)
         p2, c2 = viterbi(nodes, edges)
-        assert p1 == p2 and c1 == pytest.approx(c2, rel=1e-12)
+        p3, c3 = astar(nodes, edges)
+        assert p1 == p2 == p3 and c1 == pytest.approx(c2, rel=1e-12) and c3 == pytest.approx(c2, rel=1e-12)
+        assert chain_dp(n_pad, e_pad).tolist() == p2
         # edges between two single-node layers are never read
         free = np.array([len(n) > 1 for n in nodes])
         both_forced = ~free[:-1] & ~free[1:]

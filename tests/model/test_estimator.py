@@ -273,3 +273,24 @@ def test_cli_inspect_prints_the_report(tmp_path, capsys):
     assert "4 phones, 5 modes, 2 channels" in out
     assert "phone 'a': 2 mode(s)" in out and "a^0..a^M=[-1.  2.  0.]" in out
     assert main(["inspect", str(tmp_path / "missing.dam")]) == 1
+
+
+@pytest.mark.filterwarnings("ignore::dam.base.ConvergenceWarning")
+def test_zero_weights_of_the_search_are_an_ablation_not_a_crash():
+    """w_s = 0 (context only) or w_c = 0 (smoothness only): missing modes stay impossible (0 * inf is
+    not a cost), every chosen mode belongs to its phone, and the weights act without refitting."""
+    import dam
+    from dam.model.estimator import DAM
+    train = dam.datasets.load("tiny")
+    model = DAM(max_iter=2, n_resample=8, min_occurrences=4, min_mode_size=2, mode_preference="median").fit(train)
+    assert max(g for _, g in model.phone_modes_.values()) > 1
+    for params in ({"w_s": 0.0}, {"w_c": 0.0}, {"w_c": 0.0, "w_s": 0.0}):
+        model.set_params(**params)
+        for u in train:
+            modes, cost = model.select_modes(u.alignment)
+            for p, g in zip(u.alignment.labels, modes):
+                first, n = model.phone_modes_[p]
+                assert first <= g < first + n
+            assert np.isfinite(cost)
+            assert np.isfinite(model.predict(u.alignment)).all()
+        model.set_params(w_c=1000.0, w_s=1.0)

@@ -34,7 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from dam.corpus.atomic import atomic_write
 from dam.corpus.data import DataError
+from dam.corpus.encoding import decode_text
 from dam.corpus.formats.tables import frame_rate_from_times
 
 __all__ = ["EstTrack", "read_est", "write_est", "read_est_trajectory", "stored_frame_rate", "BYTE_ORDERS"]
@@ -87,7 +89,7 @@ def _parse_header(raw: bytes, path: str) -> tuple[dict, list | None, int]:
     data_start = len(raw) if data_start < 0 else data_start + 1
     header: dict = {}
     names: dict[int, str] = {}
-    for line in raw[len(_MAGIC):end].decode("latin-1").splitlines():
+    for line in decode_text(raw[len(_MAGIC):end], path, field="header").splitlines():
         parts = line.split(None, 1)
         if not parts:
             continue
@@ -131,8 +133,13 @@ def read_est(path) -> EstTrack:
         floats, or non-numeric ASCII values.
     """
     path = os.fspath(path)
-    with open(path, "rb") as fh:
-        raw = fh.read()
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except OSError as exc:
+        raise DataError(path, "path", path, f"cannot be read ({exc.strerror or exc})") from None
+    if raw.startswith(b"\xef\xbb\xbf"):  # a UTF-8 byte-order mark (dam.corpus.encoding)
+        raw = raw[3:]
     header, channels, start = _parse_header(raw, path)
     n_frames, n_channels = header["NumFrames"], header["NumChannels"]
     width = n_channels + 2
@@ -151,7 +158,7 @@ def read_est(path) -> EstTrack:
                             f"NumFrames {n_frames} x (NumChannels {n_channels} + 2) float32 need {expected}", hint)
         table = np.frombuffer(body, dtype=BYTE_ORDERS[order] + "f4").reshape(n_frames, width)
     elif dtype == "ascii":
-        rows = [ln.split() for ln in raw[start:].decode("latin-1").splitlines() if ln.strip()]
+        rows = [ln.split() for ln in decode_text(raw[start:], path, field="frames").splitlines() if ln.strip()]
         if len(rows) != n_frames:
             raise DataError(path, "frames", len(rows), f"the header says NumFrames {n_frames}")
         for i, r in enumerate(rows):
@@ -181,7 +188,7 @@ def write_est(path, values, *, times=None, frame_rate: float | None = None, chan
         Frame times in seconds; or give ``frame_rate`` (frame i at i / frame_rate).
     frame_rate : float, optional
     channels : sequence of str, optional
-        Written as ``Channel_N name`` (names must not contain white space).
+        Written as ``Channel_N name`` in UTF-8 (names must not contain white space).
     binary : bool, default True
         Binary float32 frames (as mngu0 and MOCHA ship them) or ASCII.
     byte_order : {"01", "10"}, optional
@@ -227,8 +234,8 @@ def write_est(path, values, *, times=None, frame_rate: float | None = None, chan
     lines += [f"Channel_{i} {c}" for i, c in enumerate(channels or [])]
     lines.append("EST_Header_End")
     table = np.column_stack([times, flags, values])
-    with open(path, "wb") as fh:
-        fh.write(("\n".join(lines) + "\n").encode("ascii"))
+    with atomic_write(path, "wb") as fh:
+        fh.write(("\n".join(lines) + "\n").encode("utf-8"))
         if binary:
             fh.write(table.astype(BYTE_ORDERS[byte_order] + "f4").tobytes())
         else:

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import os
 
+from dam.corpus.atomic import atomic_write
 from dam.corpus.data import SILENCE, Alignment, DataError
+from dam.corpus.encoding import read_text
 
 __all__ = ["read_lab", "write_lab", "HTK_UNITS"]
 
@@ -21,8 +23,7 @@ def read_lab(path, *, silence: str = SILENCE) -> Alignment:
     Decimal times in an HTK-looking file are refused rather than guessed at.
     """
     path = os.fspath(path)
-    with open(path, encoding="utf-8") as fh:
-        lines = fh.read().splitlines()
+    lines = read_text(path).splitlines()  # UTF-8, BOM dropped (dam.corpus.encoding)
     if any(line.strip() == "#" for line in lines):
         return _read_xlabel(path, lines, silence)
     labels, starts, ends = [], [], []
@@ -41,8 +42,12 @@ def read_lab(path, *, silence: str = SILENCE) -> Alignment:
                             "HTK label times must be integers in 100 ns units",
                             "for times in seconds use an ESPS/xwaves label file (header ending in '#') "
                             "or a TextGrid") from None
-        starts.append(s / HTK_UNITS)
-        ends.append(e / HTK_UNITS)
+        try:
+            starts.append(s / HTK_UNITS)
+            ends.append(e / HTK_UNITS)
+        except OverflowError:  # a 400-digit time: the Alignment's bound names the segment otherwise
+            raise DataError(path, f"line {lineno} times", " ".join(parts[:2])[:60],
+                            "time out of range (HTK times are in 100 ns units)") from None
         labels.append(parts[2] if len(parts) > 2 else "")
     return Alignment(labels, starts, ends, source=path, silence=silence)
 
@@ -56,7 +61,7 @@ def _read_xlabel(path: str, lines: list[str], silence: str) -> Alignment:
             continue
         try:
             ends.append(float(parts[0]))
-        except ValueError:
+        except (ValueError, OverflowError):
             raise DataError(path, f"line {lineno} end time", parts[0], "not a number (seconds)") from None
         labels.append(parts[2].strip() if len(parts) > 2 else "")
     while ends and ends[0] == 0.0:  # a marker at time 0 opens some files; it spans nothing
@@ -70,6 +75,6 @@ def _read_xlabel(path: str, lines: list[str], silence: str) -> Alignment:
 
 def write_lab(alignment: Alignment, path) -> None:
     """Write an HTK label file (times in 100 ns units)."""
-    with open(path, "w", encoding="utf-8") as fh:
+    with atomic_write(path, "w", encoding="utf-8") as fh:
         for lab, s, e in zip(alignment.labels, alignment.starts, alignment.ends):
             fh.write(f"{int(round(s * HTK_UNITS))} {int(round(e * HTK_UNITS))} {lab}\n")

@@ -64,7 +64,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Alignment, Corpus, Interval, Synthesizer
+from dam import Alignment, Corpus, Interval, StateArray, StateNames, Synthesizer
 
 __all__ = ["DynamicVisemes", "gesture_boundaries", "gesture_units", "time_normalise", "cluster_units"]
 
@@ -261,6 +261,23 @@ class DynamicVisemes(Synthesizer):
         **dict.fromkeys(["smoothing", "min_gesture", "duration_weight", "join_weight", "crossfade"],
                         [Interval(float, 0, None, closed="left")]),
     }
+    _state_schema = {  # checked at save and load (dam.modelfile.check_state)
+        "vocabulary_": StateNames("n_vocabulary"),
+        **dict.fromkeys(["y_mean_", "start_pose_"], StateArray("float", ("n_channels",))),
+        "y_scale_": StateArray("float", ("n_channels",), low=0),
+        "centroids_": StateArray("float", ("n_clusters", None, "n_channels")),
+        "unit_cluster_": StateArray("int", ("n_units",), low=0, high="n_clusters"),
+        "unit_phones_": StateArray("int", ("n_units", None), low=-1, high="n_vocabulary"),  # -1: padding
+        "unit_offset_": StateArray("int", (None,), low=0),
+        "instances_": StateArray("float", (None, "n_channels")),
+        "unit_rank_": StateArray("int", ("n_units",), low=0),
+        "string_keys_": StateNames("n_strings"),
+        "string_counts_": StateArray("float", ("n_strings", "n_clusters"), low=0),
+        "phone_counts_dv_": StateArray("float", ("n_vocabulary", "n_clusters"), low=0),
+        **dict.fromkeys(["unseen_log_prob_", "length_log_prior_"], StateArray("float", ("max_phones",))),
+        "log_rate_mean_": StateArray("float", ("n_clusters",)),
+        "log_rate_std_": StateArray("float", ("n_clusters",), low=0),
+    }
 
     def __init__(self, *, n_clusters: int = 50, max_phones: int = 4, smoothing: float = 0.03,
                  min_gesture: float = 0.06, n_shape_points: int = 10, n_points: int = 8,
@@ -285,7 +302,7 @@ class DynamicVisemes(Synthesizer):
 
     # -- fitting ---------------------------------------------------------------
     def _fit(self, corpus: Corpus) -> None:
-        from baselines.hmm.model import merge_silences
+        from baselines.hmm import merge_silences
         from dam.corpus import phone_vocabulary
         L, P = int(self.max_phones), int(self.n_points)
         self.vocabulary_ = phone_vocabulary(corpus, silence=corpus.alignments[0].silence)
@@ -344,14 +361,13 @@ class DynamicVisemes(Synthesizer):
         self.log_rate_std_ = np.array([max(rates[labels == k].std(), 0.1) for k in range(K)])
 
     # -- synthesis -------------------------------------------------------------
-    def _string_log_probs(self, idx: np.ndarray, rows: dict) -> np.ndarray:
+    def _string_log_probs(self, idx: np.ndarray, rows: dict, log_dv_given_phone: np.ndarray) -> np.ndarray:
         """log P(DV | phone string) for one string of vocabulary indices, shape (n_dv,).
 
-        ``rows`` maps each string of ``string_keys_`` to its row.
+        ``rows`` maps each string of ``string_keys_`` to its row; ``log_dv_given_phone``
+        (n_phones, n_dv) is the smoothed per-phone table of :meth:`_tables`.
         """
-        K = len(self.centroids_)
-        pc = self.phone_counts_dv_[idx]
-        back = np.log((pc + 0.5) / (pc.sum(axis=1, keepdims=True) + 0.5 * K)).mean(axis=0)
+        back = log_dv_given_phone[idx].mean(axis=0)
         back = np.exp(back - back.max())
         back /= back.sum()
         key = " ".join(self.vocabulary_[p] for p in idx)
@@ -360,6 +376,13 @@ class DynamicVisemes(Synthesizer):
             return np.log(np.maximum((c + back) / (c.sum() + 1.0), 1e-300))
         # A string never seen as a unit: Witten-Bell's escape probability for its length.
         return np.log(np.maximum(back, 1e-300)) + self.unseen_log_prob_[len(idx) - 1]
+
+    def _tables(self) -> tuple[dict, np.ndarray]:
+        """Row of every seen string, and log P(DV | phone) smoothed by half a count per DV."""
+        pc = self.phone_counts_dv_
+        K = pc.shape[1]
+        return ({k: r for r, k in enumerate(self.string_keys_)},
+                np.log((pc + 0.5) / (pc.sum(axis=1, keepdims=True) + 0.5 * K)))
 
     def _choose(self, idx: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> list[tuple[int, int, int]]:
         """Dynamic programme: the best ``(i, j, dv)`` strings covering the phones."""
@@ -371,11 +394,11 @@ class DynamicVisemes(Synthesizer):
         best = np.full((n + 1, K), np.inf)
         back = np.zeros((n + 1, K, 2), dtype=np.int64)  # (start i, previous dv)
         best[0] = 0.0
-        rows = {k: r for r, k in enumerate(self.string_keys_)}
+        rows, log_dv_given_phone = self._tables()
         for j in range(1, n + 1):
             for length in range(1, min(L, j) + 1):
                 i = j - length
-                cost = -self._string_log_probs(idx[i:j], rows) - self.length_log_prior_[length - 1]
+                cost = -self._string_log_probs(idx[i:j], rows, log_dv_given_phone) - self.length_log_prior_[length - 1]
                 rate = np.log(max(ends[j - 1] - starts[i], 1e-6) / length)
                 cost = cost + float(self.duration_weight) * ((rate - self.log_rate_mean_) / self.log_rate_std_) ** 2
                 if i == 0:  # the first unit joins from the utterances' usual first pose
@@ -386,7 +409,8 @@ class DynamicVisemes(Synthesizer):
                     total = trans[prev, np.arange(K)] + cost
                 better = total < best[j]
                 best[j] = np.where(better, total, best[j])
-                back[j][better] = np.stack([np.full(better.sum(), i), prev[better]], axis=1)
+                back[j, better, 0] = i
+                back[j, better, 1] = prev[better]
         out = []
         j, k = n, int(np.argmin(best[n]))
         while j > 0:
@@ -409,7 +433,7 @@ class DynamicVisemes(Synthesizer):
         return int(members[order[0]])
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
-        from baselines.hmm.model import merge_silences
+        from baselines.hmm import merge_silences
         labels = self._known_labels(alignment, self.unknown_phone)
         if tuple(labels) != alignment.labels:
             alignment = Alignment(labels, alignment.starts, alignment.ends, source=alignment.source,

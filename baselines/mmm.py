@@ -35,6 +35,7 @@ import math
 import numpy as np
 
 from dam import Interval, StateArray, Synthesizer, TupleOf
+from dam import progress
 from dam import Alignment, Corpus
 
 __all__ = ["MMM", "difference_gram_banded", "banded_cholesky_solve", "solve_banded_spd", "mmm_system",
@@ -288,7 +289,7 @@ class MMM(Synthesizer):
         lo = np.log(self.var_floor)
         mu, lv, mse = mu0.copy(), lv0.copy(), np.zeros(C)
         n_total = sum(len(d[0]) for d in data)
-        for ch in range(C):
+        for ch in progress.track(range(C), f"MMM (lambda {lam:g})", unit="channel"):
             utts = [(rows, dw, gab, y[:, ch]) for rows, dw, gab, y in data]
 
             def fun(x, utts=utts):

@@ -52,9 +52,11 @@ VARIANTS = [
     ("dam-paper, fitted with the modes synthesis selects", "dam-paper", {}),
     ("dam-paper, one mode per phone", "dam-paper", {"modes": "single"}),
     ("dam-paper, hold", "dam-paper", {"extrapolate": "hold"}),
+    ("dam-paper, modes chosen by context alone (w_s = 0)", "dam-paper", {"w_s": 0.0}),
     ("dam-m0 plain sum", "dam-m0", {"normalize": False}),
     ("dam (weighted average), fitted with the clustering's modes", "dam", {"fit_modes": "clustered"}),
     ("dam (weighted average)", "dam", {}),
+    ("dam (weighted average), modes chosen by context alone (w_s = 0)", "dam", {"w_s": 0.0}),
     ("dam-m0 (weighted average)", "dam-m0", {}),
 ]
 
@@ -98,6 +100,13 @@ def main(argv=None):
     res = {"machine": machine(), "channels": args.channels, "rows": rows,
            "paper": {"dam": 0.4724, "cohen_massaro": 0.6297}}
     out.mkdir(parents=True, exist_ok=True)
+    if args.variants and (out / "dam_plainsum.json").exists():   # merge into the previous run, in VARIANTS order
+        old = json.loads((out / "dam_plainsum.json").read_text())
+        if old["channels"] == args.channels:
+            by = {r["label"]: r for r in old["rows"]}
+            by.update({r["label"]: r for r in rows})
+            res["rows"] = [by[v[0]] for v in VARIANTS if v[0] in by]
+            res["merged_runs"] = [old["machine"]["date"], res["machine"]["date"]]
     (out / "dam_plainsum.json").write_text(json.dumps(res, indent=2))
     write_markdown(res, out)
 

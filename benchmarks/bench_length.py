@@ -4,9 +4,11 @@ A lab's recording is often one long take. This benchmark joins synthetic
 phrases (:func:`bench_dam.corpus_of`, 40 phones, 2 channels at 100 frames/s)
 into a single utterance of 1, 2, 5 and 10 minutes, fits each classical model
 on it and predicts it back, and writes ``benchmarks/results/length.json`` and
-``length.md``: seconds and peak traced memory (tracemalloc, which sees
-numpy's allocations) of fit and of predict. Linear cost shows as time and
-memory doubling from 5 to 10 minutes (not quadrupling).
+``length.md``: seconds and peak memory of fit and of predict. Each fit runs in
+a forked child process (imports already loaded) whose peak resident memory
+is reset before the fit and read after it (``/proc/self/clear_refs``,
+``VmHWM``), so memory is measured without slowing the run down. Linear cost
+shows as time and memory doubling from 5 to 10 minutes (not quadrupling).
 
     python benchmarks/bench_length.py [--minutes 1 2 5 10] [--models dam cohen-massaro mmm phone-mean]
 """
@@ -17,7 +19,6 @@ import json
 import os
 import sys
 import time
-import tracemalloc
 import warnings
 from pathlib import Path
 
@@ -55,15 +56,60 @@ def one_utterance(minutes: float) -> Corpus:
     return Corpus([Utterance(a, y, phrases.frame_rate, ["c0", "c1"], name=f"one{minutes}")])
 
 
+def _status_kib(field: str) -> int:
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(field + ":"):
+                return int(line.split()[1])
+    raise RuntimeError(f"no {field} in /proc/self/status")
+
+
 def measure(fn):
-    """(seconds, peak MiB) of one call, traced."""
-    tracemalloc.start()
+    """(result, seconds, peak MiB above the resident memory before the call)."""
+    with open("/proc/self/clear_refs", "w") as f:   # resets the peak (VmHWM) to the current RSS
+        f.write("5")
+    base = _status_kib("VmRSS")
     t0 = time.perf_counter()
     out = fn()
     dt = time.perf_counter() - t0
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    return out, dt, peak / 2 ** 20
+    return out, dt, max(_status_kib("VmHWM") - base, 0) / 1024
+
+
+def _fit_child(name, corpus, path, queue):
+    model = dam.make(name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, fit_s, fit_mb = measure(lambda: model.fit(corpus))
+    model.save(path)
+    queue.put((fit_s, fit_mb))
+
+
+def _predict_child(path, corpus, queue):
+    u = corpus[0]
+    model = dam.load(path)
+    pred, pred_s, pred_mb = measure(lambda: model.predict(u.alignment))
+    queue.put((pred_s, pred_mb, float(np.sqrt(np.mean((pred - u.trajectory) ** 2)))))
+
+
+def _in_child(target, *args):
+    import multiprocessing as mp
+    ctx = mp.get_context("fork")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=target, args=(*args, queue))
+    proc.start()
+    out = queue.get()
+    proc.join()
+    return out
+
+
+def run_isolated(name, corpus):
+    """Fit ``name`` on ``corpus`` in one forked child and predict with the saved model in another
+    (so neither reuses memory the other freed): (fit s, fit MiB, predict s, predict MiB, rmse)."""
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "model.dam")
+        fit_s, fit_mb = _in_child(_fit_child, name, corpus, path)
+        return (fit_s, fit_mb, *_in_child(_predict_child, path, corpus))
 
 
 def main(argv=None):
@@ -82,12 +128,7 @@ def main(argv=None):
         corpus = one_utterance(minutes)
         u = corpus[0]
         for name in args.models:
-            model = dam.make(name)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                _, fit_s, fit_mb = measure(lambda: model.fit(corpus))
-            pred, pred_s, pred_mb = measure(lambda: model.predict(u.alignment))
-            rmse = float(np.sqrt(np.mean((pred - u.trajectory) ** 2)))
+            fit_s, fit_mb, pred_s, pred_mb, rmse = run_isolated(name, corpus)
             rows.append({"model": name, "minutes": u.duration / 60, "frames": u.n_frames,
                          "segments": len(u.alignment), "fit_seconds": fit_s, "fit_peak_mib": fit_mb,
                          "predict_seconds": pred_s, "predict_peak_mib": pred_mb, "training_rmse": rmse})
@@ -100,8 +141,8 @@ def main(argv=None):
     m = res["machine"]
     lines = ["# Cost against the length of one utterance", "",
              f"{m['date']}, {m['cpu']}, {m['cores']} cores (shared; load average {res['load_average'][0]:.1f}). "
-             f"Synthetic phrases joined into one utterance, {N_CH} channels at 100 frames/s; peak memory "
-             "traced by tracemalloc, time measured in the same (traced) run.", "",
+             f"Synthetic phrases joined into one utterance, {N_CH} channels at 100 frames/s; peak resident "
+             "memory above the process's before the call (a forked child for the fit, another for predict with the saved model), time in the same run.", "",
              "| model | minutes | frames | segments | fit s | fit peak MiB | predict s | predict peak MiB |",
              "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in sorted(rows, key=lambda r: (r["model"], r["minutes"])):

@@ -87,6 +87,15 @@ class Interval(Constraint):
         Bounds; None is unbounded.
     closed : {"both", "left", "right", "neither"}, default "both"
         Which bounds belong to the interval.
+
+    Examples
+    --------
+    >>> import dam
+    >>> degree = dam.Interval(int, 0, None, closed="left")
+    >>> str(degree), degree.is_satisfied_by(4), degree.is_satisfied_by(True), degree.is_satisfied_by(4.0)
+    ('an int in [0, inf)', True, False, False)
+    >>> dam.Interval(float, 0, 1, closed="left").is_satisfied_by(float("nan"))
+    False
     """
 
     def __init__(self, kind, left, right, *, closed: str = "both"):
@@ -152,6 +161,13 @@ class Options(Constraint):
     options : set, tuple or mapping
         The allowed values; a mapping's keys are read when a value is checked,
         so the options of a registry (e.g. the input encoders) stay current.
+
+    Examples
+    --------
+    >>> import dam
+    >>> unknown_phone = dam.Options({"error", "fallback"})
+    >>> str(unknown_phone), unknown_phone.is_satisfied_by("fallback"), unknown_phone.is_satisfied_by("guess")
+    ("'error' or 'fallback'", True, False)
     """
 
     def __init__(self, options):
@@ -191,6 +207,13 @@ class TupleOf(Constraint):
     max_len : int or None, default None
     increasing : bool, default False
         The elements must be strictly increasing (e.g. ``(low, high)`` bounds).
+
+    Examples
+    --------
+    >>> import dam
+    >>> bounds = dam.TupleOf(dam.Interval(float, 0, None, closed="neither"), min_len=2, max_len=2, increasing=True)
+    >>> bounds.is_satisfied_by((0.25, 4.0)), bounds.is_satisfied_by((4.0, 0.25)), bounds.is_satisfied_by("ab")
+    (True, False, False)
     """
 
     def __init__(self, item, *, min_len: int = 1, max_len: int | None = None, increasing: bool = False):

@@ -23,6 +23,10 @@ from dam._params import Interval, InvalidParameterError, Options, TupleOf, valid
 from dam.corpus.data import MAX_FRAME_RATE, Alignment, Corpus, DataError
 from dam.modelfile import ModelFileError, StateCounts, StateNames, load, write_model_file
 
+#: One prediction holds at most this many values (2 GiB of float64; a day at 100 Hz with
+#: 300 channels): larger is refused before anything is allocated (issue 12).
+MAX_PREDICTION_VALUES = 2 ** 28
+
 __all__ = ["Synthesizer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
            "InvalidParameterError", "Interval", "Options", "TupleOf", "Tag", "TAGS", "clone", "load", "predict_inputs"]
 
@@ -318,6 +322,20 @@ class Synthesizer:
         """
         return tuple(type(self).get_tags()["reads"])
 
+    def predict_inputs(self, corpus: Corpus) -> list:
+        """What :meth:`predict` reads for every utterance of ``corpus``: the utterances
+        themselves for a model that reads audio, else their alignments."""
+        return list(corpus) if "audio" in self.reads() else corpus.alignments
+
+    def _check_output_size(self, alignment, n_frames: int) -> None:
+        """Refuse, before allocating, a prediction of more than :data:`MAX_PREDICTION_VALUES` values."""
+        size = n_frames * len(self.channels_)
+        if size > MAX_PREDICTION_VALUES:
+            raise DataError(getattr(alignment, "source", None), "duration", f"{alignment.duration:g} s",
+                            f"{n_frames} frames x {len(self.channels_)} channels at {self.frame_rate_:g} Hz "
+                            f"exceed the {MAX_PREDICTION_VALUES} values one prediction may hold",
+                            "split the alignment into utterances")
+
     def _predict_one(self, alignment) -> np.ndarray:
         from dam.corpus.data import Utterance
         from dam.corpus.formats.audio import AudioClip
@@ -326,9 +344,12 @@ class Synthesizer:
             alignment = alignment.alignment  # a phone-driven model reads the utterance's alignment
         if isinstance(alignment, Alignment):
             n = alignment.n_frames(self.frame_rate_)
+            self._check_output_size(alignment, n)
             out = np.asarray(self._predict(alignment, n), dtype=float)
         elif audio and isinstance(alignment, (Utterance, AudioClip)):
-            n = (alignment.alignment if isinstance(alignment, Utterance) else alignment).n_frames(self.frame_rate_)
+            timing = alignment.alignment if isinstance(alignment, Utterance) else alignment
+            n = timing.n_frames(self.frame_rate_)
+            self._check_output_size(timing, n)
             out = np.asarray(self._predict_audio(alignment, n), dtype=float)
         else:
             raise TypeError(f"{type(self).__name__}.predict expects a dam.Alignment, a dam.Utterance"
@@ -410,10 +431,10 @@ class Synthesizer:
 
 
 def predict_inputs(model, corpus: Corpus) -> list:
-    """What ``model.predict`` reads for every utterance of ``corpus``: the
-    utterances themselves for a model that reads audio, else their alignments."""
-    reads = getattr(model, "reads", None)
-    return list(corpus) if reads is not None and "audio" in reads() else corpus.alignments
+    """What ``model.predict`` reads for every utterance of ``corpus`` (see
+    :meth:`Synthesizer.predict_inputs`); alignments for a model without that method."""
+    method = getattr(model, "predict_inputs", None)
+    return method(corpus) if method is not None else corpus.alignments
 
 
 def clone(estimator: Synthesizer) -> Synthesizer:

@@ -15,6 +15,20 @@ A ``.npz`` archive (zip of ``.npy`` arrays, read with ``allow_pickle=False``):
 Nothing is ever unpickled; a file that is not such an archive is refused with
 :class:`ModelFileError` naming the path and the field. A saved classical model
 loads and synthesizes with numpy alone.
+
+Checked, not trusted (issue 12)
+-------------------------------
+Reading checks the archive's declared sizes before anything is allocated
+(:data:`MAX_TOTAL_BYTES` + :data:`MAX_EXPANSION` times the file size), each
+``.npy`` header against its archive entry, the dtypes (numbers, booleans, text),
+and the JSON nesting (:data:`MAX_JSON_DEPTH`); any damage is a
+:class:`ModelFileError` naming the path. Then the learned state is checked
+against the class's declared ``_state_schema`` (:class:`StateArray`,
+:class:`StateNames`, :class:`StateCounts`, :class:`StateRanges`, or a
+:mod:`dam._params` constraint for a scalar): names, dtypes, shapes consistent
+across entries, finite values, ranges. The same check runs before writing, so a
+file written by dam always loads. Files are written atomically
+(:mod:`dam.corpus.atomic`).
 """
 from __future__ import annotations
 
@@ -41,7 +55,14 @@ class ModelFileError(ValueError):
 
 
 def write_model_file(model, path) -> None:
-    """Write a fitted synthesizer's hyperparameters and learned state to ``path``."""
+    """Write a fitted synthesizer's hyperparameters and learned state to ``path``, atomically.
+
+    Raises
+    ------
+    ModelFileError
+        The state does not match the class's ``_state_schema`` or holds NaN or
+        infinity (nothing is written; an existing file at ``path`` is kept).
+    """
     arrays: dict[str, np.ndarray] = {}
     meta = {"format": FORMAT, "version": FORMAT_VERSION, "model": model_name(model),
             "class": f"{type(model).__module__}.{type(model).__qualname__}",

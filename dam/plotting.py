@@ -20,7 +20,7 @@ from __future__ import annotations
 import os
 
 __all__ = ["PALETTE", "TRUTH", "pyplot", "channel_unit", "channel_label", "figure", "time_grid",
-           "phone_tier", "phone_boundaries", "legend_outside", "save", "model_color"]
+           "phone_tier", "phone_boundaries", "legend_outside", "save", "model_color", "check_figure"]
 
 #: Okabe & Ito (2008) colour-blind-safe palette, black left out (it is the truth's colour).
 PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#999999")
@@ -176,3 +176,46 @@ def save(fig, path, *, dpi: int = 120) -> str:
         fig.savefig(tmp, dpi=dpi, format=fmt, bbox_inches="tight")  # legends outside stay in the file
     plt.close(fig)
     return path
+
+
+def check_figure(fig) -> list[str]:
+    """What in ``fig`` breaks the style rules; an empty list when nothing does.
+
+    Checks: a title (the figure's, or the only panel's); an x label on every panel that shows
+    x tick labels and a y label on every panel that shows y ticks (panels drawn with the axis
+    off, such as outline drawings, are exempt); every legend outside every panel; every line in
+    the palette, black or a grey.
+    """
+    from matplotlib.colors import to_rgb
+    fig.canvas.draw()
+    problems = []
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.axison]
+    title = fig._suptitle.get_text() if fig._suptitle is not None else ""
+    if not title and not (len(panels) == 1 and panels[0].get_title()):
+        problems.append("no title")
+    allowed = {to_rgb(c) for c in PALETTE} | {to_rgb(TRUTH)}
+    for k, ax in enumerate(panels):
+        if getattr(ax, "_colorbar", None) is not None or ax.get_label() == "<colorbar>":
+            continue
+        name = ax.get_title() or f"panel {k}"
+        shows_x = any(t.get_visible() and t.get_text() for t in ax.get_xticklabels())
+        if shows_x and not ax.get_xlabel():
+            problems.append(f"{name}: no x label")
+        shows_y = any(t.get_visible() and t.get_text().strip() for t in ax.get_yticklabels())
+        if shows_y and not ax.get_ylabel():
+            problems.append(f"{name}: no y label")
+        for line in ax.get_lines():
+            rgb = to_rgb(line.get_color())
+            if rgb not in allowed and not (abs(rgb[0] - rgb[1]) < 1e-6 and abs(rgb[1] - rgb[2]) < 1e-6):
+                problems.append(f"{name}: line colour {line.get_color()} outside the palette")
+    renderer = fig.canvas.get_renderer()
+    legends = list(fig.legends) + [ax.get_legend() for ax in panels if ax.get_legend() is not None]
+    for leg in legends:
+        box = leg.get_window_extent(renderer)
+        for ax in panels:
+            if ax.get_label() == "<colorbar>":
+                continue
+            if box.overlaps(ax.get_window_extent(renderer)):
+                problems.append(f"a legend covers panel {ax.get_title() or fig.axes.index(ax)}")
+                break
+    return problems

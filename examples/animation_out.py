@@ -6,7 +6,11 @@ target per tract parameter) and renders four of its frames to a PNG *from
 the file itself*: base mesh + weights x morph targets, read back from the
 GLB bytes as any glTF viewer does.
 
-    python examples/animation_out.py [OUT_DIR] [--blender PYTHON]   # default OUT_DIR: examples/out
+    python examples/animation_out.py [--out DIR] [--blender PYTHON] [--quick]
+
+Output goes to ``--out`` (default ``dam-examples/animation_out/`` in the working directory, which
+git ignores; a positional OUT_DIR works too). The example takes seconds, so ``--quick`` changes
+nothing.
 
 With ``--blender PYTHON`` (a Python that imports Blender's ``bpy``, e.g. the
 venv ``tests/export/export_tools.py`` installs), the same frames are also
@@ -84,7 +88,7 @@ def blender_frames(python, glb, times, out_dir):
     return [f"{prefix}_{i}.png" for i in range(len(times))]
 
 
-def main(out_dir, blender=None):
+def run(out_dir, blender=None):
     os.makedirs(out_dir, exist_ok=True)
     from dam.speech import PhoneApproximationWarning
     with warnings.catch_warnings():
@@ -112,10 +116,10 @@ def main(out_dir, blender=None):
             picks.append((lab, 0.5 * (s + e)))
     picks = picks[:4]
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
+
+    from dam import plotting
+    plt = plotting.pyplot()
     fig, axes = plt.subplots(1, len(picks), figsize=(3.2 * len(picks), 3.4))
     for ax, (lab, t) in zip(np.atleast_1d(axes), picks):
         f = int(np.argmin(np.abs(times - t)))
@@ -130,8 +134,7 @@ def main(out_dir, blender=None):
         ax.set_yticks([])
     fig.suptitle(f'"{TEXT}" -> face.glb (frames read back from the file)', fontsize=10)
     fig.tight_layout()
-    png = os.path.join(out_dir, "animation_out.png")
-    fig.savefig(png, dpi=110)
+    png = plotting.save(fig, os.path.join(out_dir, "animation_out.png"), dpi=110)
     print(f"wrote {png}")
     if blender:
         shots = blender_frames(blender, glb, [round(t * 24) / 24 for _, t in picks], out_dir)
@@ -143,8 +146,7 @@ def main(out_dir, blender=None):
         fig.suptitle(f'"{TEXT}": face.glb imported into Blender {blender_version(blender)}, rendered',
                      fontsize=10)
         fig.tight_layout()
-        png = os.path.join(out_dir, "animation_out_blender.png")
-        fig.savefig(png, dpi=110)
+        png = plotting.save(fig, os.path.join(out_dir, "animation_out_blender.png"), dpi=110)
         print(f"wrote {png}")
 
 
@@ -154,11 +156,18 @@ def blender_version(python):
     return out.stdout.strip().splitlines()[-1] if out.returncode == 0 else "?"
 
 
+def main(argv=None) -> int:
+    import argparse
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out_dir", nargs="?", help="output directory (same as --out)")
+    ap.add_argument("--out", default=os.path.join(os.getcwd(), "dam-examples", "animation_out"),
+                    help="output directory (default: ./dam-examples/animation_out)")
+    ap.add_argument("--blender", metavar="PYTHON", help="a Python that imports bpy: also render in Blender")
+    ap.add_argument("--quick", action="store_true", help="(the example is quick already)")
+    args = ap.parse_args(argv)
+    run(args.out_dir or args.out, blender=args.blender)
+    return 0
+
+
 if __name__ == "__main__":
-    args = sys.argv[1:]
-    bl = None
-    if "--blender" in args:
-        i = args.index("--blender")
-        bl = args[i + 1]
-        del args[i:i + 2]
-    main(args[0] if args else os.path.join(os.path.dirname(__file__), "out"), blender=bl)
+    sys.exit(main())

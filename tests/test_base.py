@@ -26,9 +26,11 @@ def test_import_dam_is_light():
 
 def test_phone_mean_is_the_mean_of_each_phone():
     a = Alignment(["a", "b", "a"], [0, 0.03, 0.05], [0.03, 0.05, 0.08])
-    y = np.arange(8, dtype=float)[:, None]  # frames 0-2 a, 3-4 b, 5-7 a
+    # frames at 0, 0.01, ..., 0.08 s (an alignment ending at T covers the frame times <= T): 0-2 a, 3-4 b, 5-8 a
+    y = np.arange(9, dtype=float)[:, None]
     m = PhoneMean().fit(Corpus([Utterance(a, y, 100, ["x"])]))
-    np.testing.assert_allclose(m.predict(a)[:, 0], [(0 + 1 + 2 + 5 + 6 + 7) / 6] * 3 + [3.5] * 2 + [3.5] * 3)
+    mean_a = (0 + 1 + 2 + 5 + 6 + 7 + 8) / 7
+    np.testing.assert_allclose(m.predict(a)[:, 0], [mean_a] * 3 + [3.5] * 2 + [mean_a] * 4)
 
 
 def test_target_interpolation_passes_through_midpoint_targets():
@@ -84,7 +86,7 @@ def test_saved_reference_model_predicts_with_numpy_alone(tmp_path, split):
             "a = dam.Alignment(['sil', 'p', 'aa'], [0, .1, .2], [.1, .2, .4]); y = m.predict(a);"
             "print(y.shape, [k for k in ('scipy', 'sklearn') if k in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "(40, 4) []"
+    assert out.strip() == "(41, 4) []"  # frames at 0, 0.01, ..., 0.4 s
 
 
 def test_fallback_chain_for_unseen_phones(split):

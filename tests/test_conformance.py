@@ -9,7 +9,7 @@ import pytest
 
 from dam import registry
 from dam._params import invalid_values, make_constraint
-from dam.testing import all_checks, assert_refused, default_corpora
+from dam.testing import all_checks, assert_refused, corpora_for, default_corpora
 
 # Known failures, each with its reason; strict, so the day one passes the run says so.
 KNOWN_FAILURES: dict = {   # (name, setting, check name) -> reason
@@ -17,6 +17,11 @@ KNOWN_FAILURES: dict = {   # (name, setting, check name) -> reason
        "get_test_params()[1] is a 2-epoch smoke setting of another architecture: it runs every code path, "
        "it does not train long enough to beat phone-mean (setting 0 does)"
        for name in ("lstm", "gru", "transformer")},
+    **{(name, setting, "check_time_shift_equivariance"):
+       "normalize=False (the paper's plain-sum Eq. 2): shifting lengthens the leading silence (adjacent "
+       "silences are one pause), whose dominance adds in full, and on tiny the prediction moves by "
+       "4-12% of a channel's spread past the first two segments (normalize=True, the default, passes)"
+       for name, setting in (("dam", 1), ("dam-m0", 1), ("dam-paper", 0), ("dam-paper", 1))},
 }
 
 
@@ -40,7 +45,7 @@ def _cases():
 def test_conformance(name, setting, check):
     cls = registry.get(name)  # an ImportError fails the test: a missing extra is not a reason to skip
     estimator = cls(**cls.get_test_params()[setting])
-    train, test = default_corpora()
+    train, test = corpora_for(estimator)  # the utterances with audio for a model that reads audio
     check(estimator, train, test)
 
 

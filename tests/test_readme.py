@@ -1,7 +1,6 @@
 """The README works as written: its "Writing your own model" code runs, and its numbers come
 from the benchmark results files (benchmarks/update_readme.py), never typed by hand."""
 import json
-import os
 import re
 import subprocess
 import sys
@@ -54,3 +53,47 @@ def test_writing_your_own_model_runs_as_written_and_loads_back_in_a_fresh_sessio
     assert (cls, width) == ("SmoothPhoneMean", "7")
     np.testing.assert_allclose(float(rmse2), rmse, rtol=1e-12)
 
+
+
+def _update_readme():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("update_readme", ROOT / "benchmarks" / "update_readme.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_readme_numbers_come_from_the_results_files():
+    mod = _update_readme()
+    text = README.read_text(encoding="utf-8")
+    names = [m.group("name") for m in mod.BLOCK.finditer(text)]
+    assert names, "the README has no generated blocks"
+    assert set(names) <= set(mod.BLOCKS)
+    _, stale = mod.update(text)
+    assert not stale, f"README blocks {stale} differ from benchmarks/results: run benchmarks/update_readme.py"
+
+
+def test_the_generated_all_models_table_has_every_results_row():
+    # independent of the renderer: read nn.json ourselves and find each RMSE, to 3 decimals, in its row
+    mod = _update_readme()
+    rows = json.loads((ROOT / "benchmarks" / "results" / "nn.json").read_text())["rows"]
+    table = mod.render_all_models()
+    for r in rows:
+        if r["model"] == "phone-mean":
+            continue
+        line = next(ln for ln in table.splitlines() if ln.startswith(f"| {mod.NN_LABELS.get(r['model'], r['model'])} |"))
+        assert f"{r['rmse']:.3f}" in line
+
+
+def test_update_readme_check_mode_fails_on_a_hand_edit(tmp_path, monkeypatch):
+    mod = _update_readme()
+    m = next(b for b in mod.BLOCK.finditer(README.read_text(encoding="utf-8")) if b.group("name") == "all-models")
+    text = f"# a README\n\n{m.group(0)}\n\nmore text\n"
+    m = next(mod.BLOCK.finditer(text))
+    edited = text[:m.start("body")] + m.group("body").replace("|", "| 0.123 |", 1) + text[m.end("body"):]
+    fake = tmp_path / "README.md"
+    fake.write_text(edited, encoding="utf-8")
+    monkeypatch.setattr(mod, "README", fake)
+    assert mod.main(["--check"]) == 1
+    assert mod.main([]) == 0 and mod.main(["--check"]) == 0
+    assert fake.read_text(encoding="utf-8") == text

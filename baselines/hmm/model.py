@@ -49,10 +49,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Alignment, Corpus, Interval, Synthesizer
+from dam import Alignment, Corpus, Interval, StateArray, StateNames, Synthesizer
 
 from .mlpg import dynamic_features, mlpg
-from .tree import answer_questions, context_indices, context_questions, grow_tree, tree_leaves
+from .tree import answer_questions, context_indices, context_questions, group_sums, grow_tree, tree_leaves
 
 __all__ = ["HMMSynthesizer", "viterbi_em", "viterbi_segments", "even_states", "durations_for_length", "merge_silences"]
 
@@ -74,6 +74,14 @@ def merge_silences(alignment: Alignment) -> Alignment:
 def even_states(n: int, n_states: int) -> np.ndarray:
     """State of each of ``n`` frames when they are spread evenly over ``n_states`` states, shape (n,)."""
     return (np.arange(n) * n_states) // max(n, 1)
+
+
+def _even_states_all(length, n_states: int) -> np.ndarray:
+    """:func:`even_states` of consecutive segments of ``length`` frames, concatenated."""
+    length = np.asarray(length)
+    first = np.repeat(np.cumsum(length) - length, length)
+    n = np.repeat(length, length)
+    return ((np.arange(int(length.sum())) - first) * n_states) // np.maximum(n, 1)
 
 
 def viterbi_segments(loglik: np.ndarray, log_stay: np.ndarray, log_move: np.ndarray) -> np.ndarray:
@@ -178,7 +186,7 @@ def viterbi_em(obs, start, length, phone, n_phones: int, n_states: int, *, n_ite
         floor = 1e-4 * np.maximum(obs.var(axis=0), 1e-12)
     S = int(n_states)
     gauss = np.asarray(phone)[:, None] * S + np.arange(S)[None, :]
-    states = np.concatenate([even_states(n, S) for n in seg.length])
+    states = _even_states_all(seg.length, S)
     means, variances = _estimate(seg, states, gauss, n_phones * S, floor)
     for _ in range(int(n_iter)):
         stay, move = _transitions(seg, states, gauss, n_phones * S)
@@ -285,6 +293,23 @@ class HMMSynthesizer(Synthesizer):
         "min_segments": [Interval(int, 1, None, closed="left")],
         **dict.fromkeys(["mdl_factor", "min_occupancy"], [Interval(float, 0, None, closed="left")]),
         "variance_floor": [Interval(float, 0, 1, closed="neither")],
+    }
+    _state_schema = {  # checked at save and load (dam.modelfile.check_state)
+        "vocabulary_": StateNames("n_vocabulary"),
+        "silence_": None,
+        "y_mean_": StateArray("float", ("n_channels",)),
+        "y_scale_": StateArray("float", ("n_channels",), low=0),
+        "question_offsets_": StateArray("int", ("n_questions",)),
+        "question_members_": StateArray("bool", ("n_questions", "n_vocabulary")),
+        "question_names_": StateNames("n_questions", unique=False),
+        "trees_": None,
+        "leaf_offset_": StateArray("int", (None,), low=0),
+        "n_leaves_": None,
+        "means_": StateArray("float", ("n_leaves", "n_features")),
+        "variances_": StateArray("float", ("n_leaves", "n_features"), low=0),
+        "duration_means_": StateArray("float", ("n_duration_leaves", None)),
+        "duration_variances_": StateArray("float", ("n_duration_leaves", None), low=0),
+        "duration_tree_": None,
     }
 
     def __init__(self, *, n_states: int = 5, context: int = 2, n_iter: int = 5, n_realign: int = 1,
@@ -417,6 +442,9 @@ class HMMSynthesizer(Synthesizer):
             raise ValueError(f"labels must hold {2 * c + 1} phones (context {c}), got {len(labels)}")
         if not 0 <= state < int(self.n_states):
             raise ValueError(f"state is {state!r}; the models have {self.n_states} states")
+        unknown = [lab for lab in labels if lab not in self.vocabulary_]
+        if unknown:
+            raise ValueError(f"phones {unknown} were not seen in training; known: {' '.join(self.vocabulary_)}")
         ctx = context_indices(list(labels), self.vocabulary_, c, self.silence_)[c:c + 1]
         answers = answer_questions(ctx, self.question_offsets_, self.question_members_, c)
         return int(self.leaf_offset_[state] + tree_leaves(self.trees_[state], answers)[0])
@@ -439,7 +467,7 @@ class HMMSynthesizer(Synthesizer):
 
     def state_durations(self, labels) -> np.ndarray:
         """Mean frames of each state of the middle phone of ``labels`` (duration model), shape (n_states,)."""
-        self._check_fitted()
+        self.tied_state(labels, 0)  # checks the labels
         c = int(self.context)
         ctx = context_indices(list(labels), self.vocabulary_, c, self.silence_)[c:c + 1]
         answers = answer_questions(ctx, self.question_offsets_, self.question_members_, c)
@@ -447,12 +475,10 @@ class HMMSynthesizer(Synthesizer):
 
 
 def _unit_stats(unit, obs, n_units):
-    occ = np.bincount(unit, minlength=n_units).astype(float)
-    sums = np.zeros((n_units, obs.shape[1]))
-    sumsq = np.zeros((n_units, obs.shape[1]))
-    np.add.at(sums, unit, obs)
-    np.add.at(sumsq, unit, obs * obs)
-    return occ, sums, sumsq
+    """Occupancy (n_units,), sums and sums of squares (n_units, D) of the frames of every unit."""
+    S = group_sums(unit, np.concatenate([np.ones((len(obs), 1)), obs, obs * obs], axis=1), n_units)
+    D = obs.shape[1]
+    return S[:, 0], S[:, 1:D + 1], S[:, D + 1:]
 
 
 def _frame_gaussians(seg, states, gauss_of_seg):
@@ -489,7 +515,7 @@ def _transitions(seg, states, mono, n_mono):
 
 def _realign(seg, gauss_of_seg, means, variances, stay, move, S):
     """Viterbi state alignment of every segment with at least S frames (the rest spread evenly)."""
-    states = np.concatenate([even_states(n, S) for n in seg.length])
+    states = _even_states_all(seg.length, S)
     first = np.concatenate([[0], np.cumsum(seg.length)[:-1]])
     prec = 1.0 / variances
     logdet = np.log(variances).sum(axis=1)

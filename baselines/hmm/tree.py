@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["context_questions", "context_indices", "answer_questions", "grow_tree", "tree_leaves",
-           "gaussian_loglik"]
+           "gaussian_loglik", "group_sums"]
 
 _LOG2PI = float(np.log(2 * np.pi))
 
@@ -172,7 +172,7 @@ def grow_tree(occ, sums, sumsq, ctx, columns, members, *, floor, mdl_factor: flo
         Y = np.zeros((len(columns), X.shape[1]))  # yes-branch statistics of every question
         for c, qs in enumerate(by_col):
             if len(qs):
-                Y[qs] = M[qs] @ _sum_by_phone(ctx[idx, c], X[idx], V)
+                Y[qs] = M[qs] @ group_sums(ctx[idx, c], X[idx], V)
         Nn = total - Y
         gain = (gaussian_loglik(Y[:, 0], Y[:, 1:D + 1], Y[:, D + 1:], floor)
                 + gaussian_loglik(Nn[:, 0], Nn[:, 1:D + 1], Nn[:, D + 1:], floor)
@@ -204,13 +204,15 @@ def grow_tree(occ, sums, sumsq, ctx, columns, members, *, floor, mdl_factor: flo
     return tree
 
 
-def _sum_by_phone(phone, X, V):
-    """Rows of ``X`` summed by ``phone`` (ints in ``0 .. V-1``): shape (V, X.shape[1])."""
-    order = np.argsort(phone, kind="stable")
-    p = phone[order]
-    first = np.flatnonzero(np.r_[True, p[1:] != p[:-1]])
-    out = np.zeros((V, X.shape[1]))
-    out[p[first]] = np.add.reduceat(X[order], first, axis=0)
+def group_sums(group, X, n_groups: int) -> np.ndarray:
+    """Rows of ``X`` (n, K) summed by ``group`` (n ints in ``0 .. n_groups-1``): shape (n_groups, K)."""
+    out = np.zeros((n_groups, X.shape[1]))
+    if len(group) == 0:
+        return out
+    order = np.argsort(group, kind="stable")
+    g = group[order]
+    first = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+    out[g[first]] = np.add.reduceat(X[order], first, axis=0)
     return out
 
 

@@ -23,8 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam import Interval, Options, Synthesizer
-from dam import Alignment, Corpus
+from dam import Alignment, Corpus, Interval, Options, Synthesizer
 
 from .encoders import ENCODERS, EncoderSpec, encoder_from_state, encoder_reads, make_encoder
 

@@ -210,7 +210,7 @@ class AudioEncoder:
                                 "audio: corpus.subset([i for i, u in enumerate(corpus) if u.audio])")
 
     @classmethod
-    def fit(cls, corpus: Corpus, **options) -> "AudioEncoder":
+    def fit(cls, corpus: Corpus, **options) -> AudioEncoder:
         cls.check_corpus(corpus)
         enc = cls(**options)
         X = np.concatenate([enc.raw_frames(u, corpus.frame_rate, u.n_frames) for u in corpus])

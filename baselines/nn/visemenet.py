@@ -291,10 +291,11 @@ class VisemeNet(NeuralSynthesizer):
     @classmethod
     def get_test_params(cls) -> list[dict]:
         return [{"n_past": 3, "n_future": 3, "hidden_size": 16, "n_layers": 1, "fc_size": 16, "seq_len": 32,
-                 "dropout": 0.0, "pretrain_epochs": 5, "max_epochs": 30, "learning_rate": 1e-2, "batch_size": 16,
+                 "dropout": 0.0, "pretrain_epochs": 3, "max_epochs": 30, "learning_rate": 1e-2, "batch_size": 16,
                  "verbose": 0},
-                {"n_past": 2, "n_future": 1, "hidden_size": 8, "n_layers": 2, "fc_size": 8, "seq_len": 16,
-                 "pretrain_epochs": 1, "max_epochs": 2, "gate": False, "encoder": "mfcc", "verbose": 0}]
+                {"n_past": 2, "n_future": 1, "hidden_size": 8, "n_layers": 2, "fc_size": 8, "seq_len": 32,
+                 "dropout": 0.0, "pretrain_epochs": 2, "max_epochs": 25, "learning_rate": 1e-2, "batch_size": 16,
+                 "gate": False, "encoder": "mfcc", "verbose": 0}]
 
     def _check_param_relations(self) -> None:
         from dam import InvalidParameterError

@@ -25,7 +25,7 @@ COMMANDS: list[str] = [
     "dam.cli.models:add_evaluate", "dam.cli.compare:add_demo", "dam.cli.compare:add_compare",
     "dam.cli.inspect:add_inspect",
     "dam.cli.rig:add_crossmap", "dam.cli.rig:add_retarget", "dam.cli.rig:add_rigsolve",
-    "dam.cli.datasets:add_generate_vtl", "dam.cli.datasets:add_vtl_lexicon",
+    "dam.cli.datasets:add_generate_vtl", "dam.cli.datasets:add_vtl_audio", "dam.cli.datasets:add_vtl_lexicon",
     "dam.cli.datasets:add_generate_tiny",
     "dam.cli.speech:add_align", "dam.cli.speech:add_animate",
     "dam.cli.export:add_export_runtime",

@@ -58,7 +58,7 @@ def cmd_compare(args) -> int:
 def add_demo(sub) -> None:
     p = sub.add_parser("demo", help="fit the models on the bundled corpus and compare them (about a minute)",
                        description="Fit the DAM and the classical models it is compared with on the bundled "
-                                   "VocalTractLab corpus's training part (the first 5 minutes), score them on its "
+                                   "VocalTractLab corpus's training part (the first 4 minutes), score them on its "
                                    "held-out part on three channels (jaw, lips, tongue tip) and print the "
                                    "comparison table; tables and figures go to --out. About a minute on two "
                                    "cores; --full runs every demo model on six channels and all the training "

@@ -62,6 +62,40 @@ def run_generate(args) -> dict:
     return corpora
 
 
+def add_vtl_audio(sub) -> None:
+    p = sub.add_parser(
+        "vtl-audio", help="synthesize the audio of (more of) the vtl corpus (needs dam[vtl,audio])",
+        description="Give a generated vtl corpus its audio, in place: VocalTractLab synthesizes each phrase again "
+                    "from its gestural score (same seed, same phrases; every stored trajectory must come out bit "
+                    "for bit), and 16 kHz 16-bit FLAC goes beside it as <stem>.flac. Phrases that have their FLAC "
+                    "are skipped (the cache): stop it any time and run it again. Audio costs about 2-4 s of CPU "
+                    "per second of speech (about 50 CPU-minutes for the whole bundled corpus).",
+        epilog="the whole bundled corpus: dam vtl-audio --fraction 1   (run it with nice on a shared machine)")
+    p.add_argument("root", nargs="?", default=None,
+                   help="directory with train/ and test/ (default: the bundled vtl corpus)")
+    p.add_argument("--fraction", type=float, default=1.0, metavar="F",
+                   help="share of the phrases of each split that should have audio (default 1)")
+    p.add_argument("--max-cpu-minutes", type=float, default=None, metavar="MIN",
+                   help="stop starting phrases after this much CPU time (default: no limit)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_vtl_audio)
+
+
+def _cmd_vtl_audio(args) -> int:
+    from dam.corpus.data import DataError
+    from dam.datasets import path as dataset_path
+    from dam.datasets.vtl import add_vtl_audio
+    if not 0 <= args.fraction <= 1:
+        raise DataError(None, "--fraction", args.fraction, "must be between 0 and 1")
+    root = args.root or str(dataset_path("vtl"))
+    report = add_vtl_audio(root, fraction=args.fraction, verbose=0 if args.quiet else 1,
+                           max_cpu_seconds=None if args.max_cpu_minutes is None else 60 * args.max_cpu_minutes)
+    for split, r in report.items():
+        print(f"{split}: {r['audio']} of {r['n']} phrases have audio ({r['added']} new), "
+              f"{r['seconds'] / 60:.1f} min of speech, {r['bytes'] / 1e6:.1f} MB of FLAC")
+    return 0
+
+
 def add_vtl_lexicon(sub) -> None:
     p = sub.add_parser("vtl-lexicon", help="extract the VTL word list from articubench (maintainers)",
                        description="Extract the word list of the vtl corpus generator from articubench's "

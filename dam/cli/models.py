@@ -55,7 +55,11 @@ def cmd_fit(args) -> int:
     corpus = corpus_arg(args.corpus)
     info(args, f"fitting {model!r} on {corpus!r}")
     t0 = time.perf_counter()
-    model.fit(corpus)
+    from dam.progress import task
+    with task("fit", 1, unit="model") as bar:  # on a terminal the clock runs from the first second
+        bar.begin(args.model)
+        model.fit(corpus)
+        bar.step(args.model)
     info(args, f"fitted in {time.perf_counter() - t0:.2f} s; training RMSE {-model.score(corpus):.4g}")
     model.save(args.output)
     info(args, f"saved {args.output}")
@@ -74,6 +78,8 @@ def add_predict(sub) -> None:
                    help="output file, its extension picks the format (.csv, .json, .gltf, .glb, .TextGrid; "
                         "see dam.export); default: CSV on standard output")
     p.add_argument("--tier", default="phones", help="TextGrid tier with the phones (default: phones)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace OUT even if it is a file of a corpus (never an input)")
     from dam.cli.export import add_export_options
     add_export_options(p)
     p.set_defaults(func=cmd_predict, _parser=p)
@@ -86,7 +92,7 @@ def cmd_predict(args) -> int:
     from dam.cli.export import check_export_options, write_animation
     check_export_options(args._parser, args, ".csv" if args.output == "-" else args.output)
     if args.output != "-":
-        check_output(args.output, inputs=[args.model_file, args.alignment])
+        check_output(args.output, inputs=[args.model_file, args.alignment], overwrite=args.overwrite)
     model = load(args.model_file)
     alignment = read_alignment(args.alignment, tier=args.tier)
     y = model.predict(alignment)

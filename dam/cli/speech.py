@@ -58,9 +58,6 @@ def _cmd_align(args) -> int:
     if args.output:
         from dam.corpus.atomic import check_output  # before any work: never over an input
         check_output(args.output, inputs=[args.audio, args.transcript])
-    if args.output:
-        from dam.corpus.atomic import check_output  # before any work: never over an input
-        check_output(args.output, inputs=[args.audio, args.transcript])
     text = _transcript(args)
     t0 = time.perf_counter()
     result = align(args.audio, text)
@@ -116,6 +113,8 @@ def add_animate(sub) -> None:
                    help="output file; its extension picks the format (.csv, .json, .gltf, .glb, .TextGrid, "
                         ".gif/.mp4/.html: the moving vocal tract); "
                         "required unless --stream")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace OUT even if it is a file of a corpus (never an input)")
     p.add_argument("--stream", action="store_true",
                    help="print the frames to standard output as CSV lines (time, channels) as they become final, "
                         "phone by phone (dam.export.streaming; the same values as the batch output)")
@@ -149,7 +148,8 @@ def _cmd_animate(args) -> int:
     from dam.corpus.atomic import check_output  # before any work: never over an input
     if args.output:
         check_output(args.output, inputs=[args.audio, args.transcript, args.alignment, args.durations,
-                                          None if args.model == "default" else args.model])
+                                          None if args.model == "default" else args.model],
+                     overwrite=args.overwrite)
     text = _transcript(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PhoneApproximationWarning)  # printed below, once
@@ -188,5 +188,9 @@ def _cmd_animate(args) -> int:
 def _write(result, path, args) -> None:
     """Write through dam.export (the format from the extension), with the export options of ``args``."""
     from dam.cli.export import write_animation
+    model = None
+    if os.path.splitext(path)[1].lower() in (".json", ".textgrid"):  # they record the DAM's chosen modes
+        from dam.speech.animation import _resolve_model
+        model = _resolve_model(args.model)[0]
     write_animation(args, result.trajectories, result.channels, result.frame_rate, path,
-                    alignment=result.alignment, metadata=dict(result.metadata))
+                    alignment=result.alignment, metadata=dict(result.metadata), model=model)

@@ -123,9 +123,7 @@ def _keep_mode(path: str, tmp: str) -> None:
     try:
         mode = os.stat(path).st_mode & 0o7777
     except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        mode = 0o666 & ~umask
+        mode = 0o666 & ~_umask()
     with contextlib.suppress(OSError):
         os.chmod(tmp, mode)
 
@@ -203,23 +201,34 @@ def atomic_directory(path, *, overwrite: bool = False) -> Iterator[str]:
             raise OutputPathError(path, "output", path, "the directory exists and is not empty",
                                   "choose a new directory or pass overwrite (--overwrite) to replace it")
     tmp = _temp_name(path, directory=True)
+    old = None
     try:
         yield tmp
         os.chmod(tmp, 0o777 & ~_umask())
         if os.path.isdir(path):
-            old = _temp_name(path + "-old", directory=True)
-            os.replace(path, os.path.join(old, "d"))
-            os.replace(tmp, path)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, path)
+            old = os.path.join(_temp_name(path + "-old", directory=True), "d")
+            os.replace(path, old)
+        os.replace(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        if old is not None and os.path.isdir(old) and not os.path.exists(path):
+            os.replace(old, path)  # the new directory could not be moved in: put the old one back
         raise
+    finally:
+        if old is not None:
+            shutil.rmtree(os.path.dirname(old), ignore_errors=True)
     _fsync_dir(os.path.dirname(os.path.abspath(path)))
 
 
 def _umask() -> int:
+    """The process umask, read without changing it where the system allows (threads may be writing)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
     m = os.umask(0)
     os.umask(m)
     return m
@@ -334,14 +343,19 @@ _TRAJECTORY_SUFFIXES = (".csv", ".npy", ".ema", ".est", ".trk", ".wav")
 
 
 def _corpus_member(path: str) -> bool:
-    """``path`` is ``corpus.json``, an alignment, or a trajectory/audio file beside an alignment
-    of the same stem: data of a corpus directory, which an output must not replace silently."""
+    """``path`` is ``corpus.json``, or one file of an utterance of a corpus directory (an
+    alignment beside a trajectory of the same stem, or the reverse): recorded data, which an
+    output must not replace silently."""
     name = os.path.basename(path)
+    if name == "corpus.json":
+        return True
     stem, suffix = os.path.splitext(name)
     suffix = suffix.lower()
-    if name == "corpus.json" or suffix in _ALIGNMENT_SUFFIXES:
-        return True
-    if suffix in _TRAJECTORY_SUFFIXES:
-        d = os.path.dirname(os.path.abspath(path))
-        return any(os.path.exists(os.path.join(d, stem + s)) for s in (".TextGrid", ".textgrid", ".lab", ".par"))
-    return False
+    partners = (_TRAJECTORY_SUFFIXES if suffix in _ALIGNMENT_SUFFIXES
+                else _ALIGNMENT_SUFFIXES if suffix in _TRAJECTORY_SUFFIXES else ())
+    d = os.path.dirname(os.path.abspath(path))
+    try:
+        siblings = {os.path.splitext(n)[0] + os.path.splitext(n)[1].lower() for n in os.listdir(d)}
+    except OSError:
+        return False
+    return any(stem + s in siblings for s in partners)

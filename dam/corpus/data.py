@@ -68,6 +68,29 @@ def real_array(values, source, field_: str) -> np.ndarray:
 
     numpy would raise its own errors for ragged or object input, and silently drop the
     imaginary part of complex input (with only a warning): neither names the file or field.
+
+    Parameters
+    ----------
+    values : array-like
+        Numbers of any shape (bool, int, float; an object array of numbers).
+    source : str or None
+        The file, for the message.
+    field_ : str
+        The field, for the message.
+
+    Returns
+    -------
+    ndarray of float64, the shape of ``values``
+
+    Examples
+    --------
+    >>> from dam.corpus.data import real_array
+    >>> real_array([[1, 2], [3, 4]], "u.csv", "trajectory").dtype
+    dtype('float64')
+    >>> real_array([[1.0], [2.0, 3.0]], "u.csv", "trajectory")
+    Traceback (most recent call last):
+    ...
+    dam.corpus.data.DataError: u.csv: field 'trajectory': must be an array of real numbers ...
     """
     import warnings
     try:

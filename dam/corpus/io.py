@@ -31,8 +31,8 @@ import numpy as np
 from dam.corpus.atomic import atomic_write
 from dam.corpus.data import SILENCE, Alignment, Corpus, DataError, Utterance, resolve_sensors
 from dam.corpus.encoding import read_text
-from dam.corpus.formats.bas import read_par
 from dam.corpus.formats.audio import AUDIO_SUFFIXES, audio_header
+from dam.corpus.formats.bas import read_par
 from dam.corpus.formats.detect import CORPUS_FORMATS, detect_format, load_formatted
 from dam.corpus.formats.est import read_est_trajectory
 from dam.corpus.formats.htk import read_lab, write_lab

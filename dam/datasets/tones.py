@@ -88,7 +88,8 @@ def tiny_with_audio(directory=None, *, sample_rate: int = TONES_RATE) -> Corpus:
     from dam.corpus.io import load_corpus, save_corpus
     from dam.datasets import load
 
-    d = Path(directory) if directory is not None else Path(tempfile.gettempdir()) / f"dam-tiny-audio-{getattr(os, 'getuid', lambda: 0)()}"
+    user = getattr(os, "getuid", lambda: 0)()
+    d = Path(directory) if directory is not None else Path(tempfile.gettempdir()) / f"dam-tiny-audio-{user}"
     corpus = load("tiny")
     save_corpus(corpus, d, metadata={"audio_rate": int(sample_rate)})
     for u in corpus:

@@ -693,7 +693,7 @@ def write_flac(path, samples: np.ndarray, audio_rate: int) -> None:
 
 def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None = None,
                   deadline: float | None = None, audio_rate: int = 16000, verbose: int = 1,
-                  lexicon=None, mapping: dict | None = None) -> dict:
+                  splits=("train", "test"), lexicon=None, mapping: dict | None = None) -> dict:
     """Give (more of) a generated vtl corpus its audio, in place; cached and resumable.
 
     The phrases are planned again from the seed in ``corpus.json`` (the plans
@@ -704,8 +704,9 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
     ``<stem>.npy`` bit for bit (over its frames: files of an older generator
     may lack the last frame); the trajectories are never rewritten. A
     phrase that has its FLAC is skipped (the cache), so the command can be
-    stopped and run again. Older ``<stem>.wav`` files are converted to FLAC
-    (same samples) and removed.
+    stopped and run again; a phrase that ``corpus.json`` marks as having
+    audio but whose file is gone comes first. Older ``<stem>.wav`` files are
+    converted to FLAC (same samples) and removed.
 
     Parameters
     ----------
@@ -722,6 +723,8 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
     audio_rate : int, default 16000
     verbose : int, default 1
         0 silences the progress bar (shown on a terminal only).
+    splits : tuple of str, default ("train", "test")
+        The splits to work on, in this order.
     lexicon, mapping
         As for :func:`generate_vtl_corpus` (defaults: the bundled ones).
 
@@ -745,7 +748,7 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
     root = Path(root)
     t_cpu0 = time.process_time()
     report = {}
-    for split in ("train", "test"):
+    for split in splits:
         d = root / split
         meta_path = d / "corpus.json"
         if not meta_path.exists():
@@ -773,7 +776,9 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
             if wav.exists():
                 wav.unlink()
         have = [i for i, p in enumerate(plans) if (d / f"{p.name}{AUDIO_SUFFIX}").exists()]
-        order = audio_priority(len(plans), first=have)
+        # Phrases corpus.json says have audio come next: a deleted file is made again first.
+        lost = [i for i, p in enumerate(plans) if stored[p.name].get("audio") and i not in set(have)]
+        order = audio_priority(len(plans), first=have + lost)
         n_target = min(len(plans), math.ceil(fraction * len(plans) - 1e-9))
         todo = [i for i in order[:n_target] if i not in set(have)]
         added = 0

@@ -70,8 +70,10 @@ def plot_predictions(example: dict, summary, *, corpus: str = "", max_models: in
     for i in range(len(rows)):
         lo = min(a.get_ylim()[0] for a in axes[i])
         hi = max(a.get_ylim()[1] for a in axes[i])
-        for a in axes[i]:
+        for j, a in enumerate(axes[i]):
             a.set_ylim(lo, hi)
+            if j:  # one scale per row: its labels on the first column only
+                a.tick_params(labelleft=False)
     plotting.legend_outside(fig, list(handles.values()), list(handles), title="trajectory")
     return fig
 
@@ -113,6 +115,7 @@ def plot_rmse(summary, per_channel, *, best: str | None, corpus: str = "", metad
     err = np.array([[r["rmse"] - r["rmse_ci_low"] for r in ok], [r["rmse_ci_high"] - r["rmse"] for r in ok]])
     ax.barh(y, vals, xerr=err, color=colors, capsize=2, error_kw={"lw": 0.8})
     ax.set_yticks(y, names)
+    ax.set_ylabel("model")
     ax.set_title("all channels (95% CI)")
     ax.set_xlabel(f"RMSE ({mixed}{', pooled' if len(units) > 1 else ''})")
     by = {(r["model"], r["channel"]): r["rmse"] for r in per_channel}
@@ -121,6 +124,7 @@ def plot_rmse(summary, per_channel, *, best: str | None, corpus: str = "", metad
         v = [by.get((m, c), np.nan) for m in names]
         ax.barh(y, v, color=colors)
         ax.set_yticks(y, names if k % ncols == 0 else [""] * len(names))
+        ax.set_ylabel("model" if k % ncols == 0 else "")
         ax.set_title(c)
         unit = plotting.channel_unit(c, metadata)
         ax.set_xlabel(f"RMSE ({'channel units' if unit is None else unit or 'no unit'})")

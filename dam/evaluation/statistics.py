@@ -31,6 +31,7 @@ def holm(pvalues) -> np.ndarray:
 
     Examples
     --------
+    >>> from dam.evaluation.statistics import holm
     >>> holm([0.01, 0.04, 0.03, 0.5]).tolist()
     [0.04, 0.09, 0.09, 0.5]
     """
@@ -63,6 +64,7 @@ def bootstrap_rmse_ci(sse, counts, *, n_boot: int = 2000, level: float = 0.95, r
 
     Examples
     --------
+    >>> from dam.evaluation.statistics import bootstrap_rmse_ci
     >>> bootstrap_rmse_ci([8.0, 8.0, 8.0], [2.0, 2.0, 2.0])   # no spread to resample
     (2.0, 2.0)
     """
@@ -88,6 +90,7 @@ def paired_wilcoxon(a, b) -> float:
 
     Examples
     --------
+    >>> from dam.evaluation.statistics import paired_wilcoxon
     >>> paired_wilcoxon([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])
     1.0
     >>> paired_wilcoxon([1, 2, 3, 4, 5, 6], [2, 4, 6, 8, 10, 12])   # exact: all six lower, 2 / 2^6
@@ -118,6 +121,7 @@ def tests_against(reference, scores: dict) -> dict:
 
     Examples
     --------
+    >>> from dam.evaluation.statistics import tests_against
     >>> tests_against([1.0, 2.0, 3.0], {"same": [1.0, 2.0, 3.0]})
     {'same': (1.0, 1.0)}
     """

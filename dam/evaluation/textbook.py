@@ -118,7 +118,7 @@ def plot_dominance_sum(model, alignment: Alignment, channel: int = 0, *, metadat
 
 
 def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=None, metadata=None,
-                  name: str = ""):
+                  name: str = "", title: str | None = None, panel_size=(3.4, 1.3), legend: str = "right"):
     """One phone sequence under several fitted models: a column per model, a row per channel.
 
     Parameters
@@ -134,6 +134,12 @@ def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=No
         Corpus metadata (channel ``units``).
     name : str
         What the sequence is, for the title.
+    title : str, optional
+        The whole title instead (default: the sequence, the number of models, whether truth is drawn).
+    panel_size : (float, float), default (3.4, 1.3)
+        Inches per panel.
+    legend : {"right", "lower"}, default "right"
+        Where the legend goes, outside the panels.
 
     Returns
     -------
@@ -152,9 +158,8 @@ def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=No
     preds = {label: np.asarray(m.predict(alignment)) for label, m in models.items()}
     seq = name or " ".join(alignment.labels)
     what = "against the recording (black)" if truth is not None else "(no recording: the models only)"
-    fig, axes, _ = plotting.time_grid(len(cols), len(models), alignment, panel_size=(3.4, 1.3),
-                                      title=f"/{seq}/ under {len(models)} model{'s' if len(models) > 1 else ''} "
-                                            f"{what}")
+    title = title or f"/{seq}/ under {len(models)} model{'s' if len(models) > 1 else ''} {what}"
+    fig, axes, _ = plotting.time_grid(len(cols), len(models), alignment, panel_size=panel_size, title=title)
     handles = {}
     for j, (label, y) in enumerate(preds.items()):
         t = np.arange(len(y)) / fr
@@ -172,5 +177,5 @@ def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=No
         hi = max(a.get_ylim()[1] for a in axes[i])
         for a in axes[i]:
             a.set_ylim(lo, hi)
-    plotting.legend_outside(fig, list(handles.values()), list(handles), title="trajectory")
+    plotting.legend_outside(fig, list(handles.values()), list(handles), title="trajectory", where=legend)
     return fig

@@ -70,7 +70,7 @@ def export(trajectories, path, *, channels, frame_rate, alignment=None, metadata
         Format options: ``decimals`` (``.csv``, default None = round-trip
         exact), ``modes`` (per-segment mode indices for ``.json`` and
         ``.TextGrid``), glTF options (``rig``, ``mapping``, ``weights``,
-        ``outline``...) as in :func:`dam.export.gltf.write_gltf`.
+        ``mesh``) as in :func:`dam.export.gltf.write_gltf`.
 
     Returns
     -------

@@ -13,8 +13,9 @@ Output frame ``k`` shows time ``k / fps``; an utterance of ``n`` control
 frames at ``frame_rate`` lasts ``n / frame_rate`` seconds and becomes
 ``round(duration * fps)`` pictures (at least one). The controls at an output
 time are interpolated linearly between the two nearest control frames, and
-the outline is VocalTractLab's exact outline of those controls (about 25 ms
-per picture and view; ``benchmarks/bench_articulators.py`` measures it).
+the outline is VocalTractLab's exact outline of those controls (a few ms of
+CPU per picture and view; a 3-second utterance at 25 pictures/s takes a few
+CPU seconds in all: ``benchmarks/bench_articulators.py`` measures it).
 
 Files:
 
@@ -196,7 +197,7 @@ class ArticulatorRenderer:
             ax.set_ylabel("y (cm)" if v == 0 else "")
             self.lines.append({c: ax.plot([], [], color=_CONTOUR_STYLE[c][0], lw=1.8, label=_CONTOUR_STYLE[c][1])[0]
                                for c in CONTOURS})
-        self.clock = fig.text(0.995, 0.995, "", ha="right", va="top", fontsize=8)
+        self.clock = fig.text(0.005, 0.995, "", ha="left", va="top", fontsize=8)
         self.tier = self.cursor = None
         if alignment is not None:
             self.tier = fig.add_subplot(gs[1, :])
@@ -274,7 +275,6 @@ def _paletted(frames):
 
 
 def _write_gif(frames, path, fps):
-    from PIL import Image
     images = _paletted(frames)
     with atomic_path(path) as tmp:
         images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:], loop=0,
@@ -315,7 +315,8 @@ function show(i) {{ k = i; img.src = "data:image/png;base64," + FRAMES[k]; pos.v
 btn.onclick = () => {{ playing = !playing; btn.textContent = playing ? "pause" : "play"; last = performance.now(); }};
 pos.oninput = () => {{ playing = false; btn.textContent = "play"; show(parseInt(pos.value)); }};
 document.getElementById("speed").onchange = (e) => {{ speed = parseFloat(e.target.value); }};
-function tick(now) {{ if (playing && now - last >= 1000 / (FPS * speed)) {{ last = now; show((k + 1) % FRAMES.length); }}
+function tick(now) {{
+  if (playing && now - last >= 1000 / (FPS * speed)) {{ last = now; show((k + 1) % FRAMES.length); }}
   requestAnimationFrame(tick); }}
 show(0); requestAnimationFrame(tick);
 </script></body></html>
@@ -323,7 +324,6 @@ show(0); requestAnimationFrame(tick);
 
 
 def _write_html(frames, path, fps, title):
-    from PIL import Image
     encoded = []
     for f in _paletted(frames):
         buf = io.BytesIO()

@@ -121,8 +121,9 @@ def read_gltf(path) -> tuple[dict, bytes]:
     """Read a ``.glb`` or ``.gltf`` into its JSON document and one merged binary buffer.
 
     Every buffer (GLB chunk, data URI or external file) is concatenated into
-    buffer 0, each starting on 16 bytes, and the buffer views are rebased.
-    Returns ``(doc, bin)``.
+    buffer 0, each starting on 16 bytes, and the buffer views are rebased;
+    images in files beside the rig are moved into the buffer too, so the
+    asset written from it stands alone. Returns ``(doc, bin)``.
     """
     path = os.fspath(path)
     try:
@@ -177,7 +178,26 @@ def read_gltf(path) -> tuple[dict, bytes]:
     for view in doc.get("bufferViews", []):
         view["byteOffset"] = view.get("byteOffset", 0) + starts[view["buffer"]]
         view["buffer"] = 0
-    doc["buffers"] = [{"byteLength": len(merged)}] if blobs else []
+    # images in files beside the rig move into the buffer: the output stands alone wherever it is written
+    for i, image in enumerate(doc.get("images", [])):
+        uri = image.get("uri")
+        if uri is None or uri.startswith("data:"):
+            continue
+        mime = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".webp": "image/webp",
+                ".ktx2": "image/ktx2"}.get(os.path.splitext(uri)[1].lower())
+        try:
+            with open(os.path.join(os.path.dirname(path), uri), "rb") as fh:
+                blob = fh.read()
+        except OSError as exc:
+            raise DataError(path, f"images[{i}].uri", uri, f"cannot be read: {exc.strerror}") from None
+        if mime is None:
+            raise DataError(path, f"images[{i}].uri", uri, "not a PNG, JPEG, WebP or KTX2 image")
+        merged.extend(b"\0" * (-len(merged) % 16))
+        doc.setdefault("bufferViews", []).append({"buffer": 0, "byteOffset": len(merged), "byteLength": len(blob)})
+        merged.extend(blob)
+        image.pop("uri")
+        image.update(bufferView=len(doc["bufferViews"]) - 1, mimeType=mime)
+    doc["buffers"] = [{"byteLength": len(merged)}] if merged else []
     return doc, bytes(merged)
 
 

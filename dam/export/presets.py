@@ -201,7 +201,7 @@ class LinearMap:
         M = np.linalg.solve(Xc.T @ Xc + lam * np.eye(X.shape[1]), Xc.T @ (W - mw))
         return cls(sources, targets, M, mw - mx @ M, preset=preset)
 
-    def then(self, other: "LinearMap") -> "LinearMap":
+    def then(self, other: LinearMap) -> LinearMap:
         """The map ``other(self(x))``: ``self``'s targets must be ``other``'s sources (any order)."""
         missing = [t for t in other.sources if t not in self.targets]
         if missing:
@@ -212,7 +212,7 @@ class LinearMap:
                          self.offset[cols] @ other.matrix + other.offset, preset=other.preset)
 
     @classmethod
-    def from_phones(cls, corpus, table: dict, preset: str = "oculus", *, ridge: float = 1e-6) -> "LinearMap":
+    def from_phones(cls, corpus, table: dict, preset: str = "oculus", *, ridge: float = 1e-6) -> LinearMap:
         """Fit channels -> visemes on a corpus whose frames are labelled by ``table[phone]``.
 
         Every frame's target is 1 for the viseme of its phone and 0 for the
@@ -242,7 +242,7 @@ class LinearMap:
         return cls.fit(np.concatenate(X), np.concatenate(W), corpus.channels, targets, ridge=ridge, preset=preset)
 
     @classmethod
-    def vtl(cls, preset: str) -> "LinearMap":
+    def vtl(cls, preset: str) -> LinearMap:
         """VTL tract parameters -> ``"oculus"`` visemes (fitted on the bundled ``vtl`` corpus with
         :data:`SAMPA_TO_OCULUS`) or -> ``"arkit"`` (that map, then :data:`OCULUS_TO_ARKIT`)."""
         import dam.datasets

@@ -11,10 +11,13 @@ Training (Section V):
 
 Synthesis (Section VI):
 
-- :mod:`~dam.model.astar`: one mode per segment by A* over the animeme graph.
+- :mod:`~dam.model.astar`: one mode per segment over the animeme graph: the paper's A*, and the
+  exact dynamic program synthesis runs (proven equal to it by the tests); the graph's fixed part
+  (:class:`~dam.model.astar.ModeGraph`) is built once at the end of fit and at load.
 - :mod:`~dam.model.synthesis`: concatenation by Eq. (2).
 
-The estimator :class:`DAM` (and the preset :class:`DAMM0`) lives in
+The estimator :class:`DAM` (and the presets :class:`DAMM0`, M = 0, and :class:`DAMPaper`, the
+paper's literal plain-sum Eq. (2) with M = 4) lives in
 :mod:`~dam.model.estimator`; :func:`inspect_report` in :mod:`~dam.model.inspection`.
 """
 from __future__ import annotations

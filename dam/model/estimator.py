@@ -11,9 +11,11 @@ Eq. (2) is by default the weighted average ``sum_j D_j A_j / sum_j D_j``
 concatenates DAMs "with the summation of their normalized values", while
 Eq. (2) as printed is a plain sum; the plain sum counts both neighbours in
 full around every phone boundary (dominance is 1 at t = 0 and t = 1 of
-adjacent phones), and on the bundled VocalTractLab corpus it loses even to
-phone-mean (held-out RMSE 0.414 vs 0.310) while the weighted average wins
-(0.236). ``normalize=False`` is the paper's literal Eq. (2).
+adjacent phones), and on the bundled VocalTractLab corpus the weighted
+average is clearly ahead (``benchmarks/results/dam_accuracy_vtl.md``,
+``dam_plainsum.md``; the README's DAM section explains why). ``normalize=False``
+is the paper's literal Eq. (2), and :class:`DAMPaper` (``dam-paper``) the
+paper's model in one word.
 
 Loading a saved model and synthesizing imports numpy only.
 """
@@ -46,9 +48,8 @@ class DAM(Synthesizer):
         paper's text concatenates DAMs "with the summation of their normalized
         values", while Eq. (2) as printed is a plain sum; the plain sum counts
         both neighbours in full around every phone boundary (dominance is 1 at
-        t = 0 and t = 1 of adjacent phones) and on the bundled VocalTractLab
-        corpus loses even to phone-mean (held-out RMSE 0.414 vs 0.310), while
-        the weighted average wins (0.236). See Notes.
+        t = 0 and t = 1 of adjacent phones); on the bundled VocalTractLab
+        corpus the weighted average is clearly ahead. See Notes.
     extrapolate : {"polynomial", "hold"}, default "polynomial"
         The animeme outside [0, 1]: the polynomial itself (the paper) or the
         value at the nearer edge.
@@ -152,19 +153,19 @@ class DAM(Synthesizer):
       interval [0, 1], so at a boundary both neighbours count in full; with
       constant animemes (``dam-m0``) the output doubles there. Where
       boundaries fall on frame times (the bundled ``vtl`` corpus) the
-      plain-sum models lose even to ``phone-mean`` on held-out data (RMSE
-      0.414 for the DAM, 0.444 dam-m0, 0.310 phone-mean), while
-      ``normalize=True`` beats it clearly (0.236; dam-m0 0.237). On ``tiny``
-      the DAM beats dam-m0 either way (0.072 vs 0.116 plain, 0.059 vs 0.106
-      normalized).
+      weighted average is clearly ahead of the plain sum on held-out data
+      (``benchmarks/results/dam_accuracy_vtl.md``). Before issue 11 the
+      plain sum lost even to ``phone-mean``: the animemes were fitted with
+      the clustering's mode labels, which synthesis cannot reproduce
+      (``fit_modes``; ``benchmarks/results/dam_plainsum.md``).
     * With ``extrapolate="polynomial"`` the objective has local minima (the
       polynomial tails can stand in for the dominance); with ``"hold"``
       parameters generated with known values are recovered from any start.
-    * With the weighted average, no other variant wins on both bundled
-      corpora (held-out RMSE, tiny / vtl): the defaults 0.059 / 0.236;
-      ``extrapolate="hold"`` 0.056 / 0.280; ``modes="single"`` 0.064 /
-      0.2365; ``mode_preference="median"`` 0.057 / 0.242. So the other
-      defaults stay as they are.
+    * With the weighted average, no other variant won on both bundled
+      corpora (held-out RMSE, tiny / vtl, before ``fit_modes``): the defaults
+      0.059 / 0.236; ``extrapolate="hold"`` 0.056 / 0.280; ``modes="single"``
+      0.064 / 0.2365; ``mode_preference="median"`` 0.057 / 0.242. So the
+      other defaults stay as they are.
     """
 
     name = "dam"

@@ -191,6 +191,8 @@ def animate(*, text: str | None = None, audio=None, alignment=None, model=None, 
                          f"or alignment=; got {', '.join(given) or 'none'}"
                          + (" and text" if alignment is not None and text is not None else ""))
     synth, model_name = _resolve_model(model)
+    if audio is not None and "audio" in getattr(synth, "reads", lambda: ())():
+        return _animate_audio(synth, model_name, audio, sample_rate, source, text, t0)
     inventory = list(synth.phone_counts_)
     target = model_alphabet(inventory)
     approx: dict = {}
@@ -236,6 +238,24 @@ def animate(*, text: str | None = None, audio=None, alignment=None, model=None, 
             "guessed_words": guessed, "rate": rate, "duration": float(phones.duration),
             "seconds": time.perf_counter() - t0}
     return SpeechAnimation(traj, list(synth.channels_), float(synth.frame_rate_), driven, phones, words, meta)
+
+
+def _animate_audio(synth, model_name, audio, sample_rate, source, text, t0) -> SpeechAnimation:
+    """An audio-driven model (issue 15) reads the audio itself: no transcript, no alignment, no phones."""
+    from dam.corpus import AudioClip
+
+    from .audio import load_audio
+    x, src = load_audio(audio, sample_rate, rate=16000, source=source)
+    clip = AudioClip(x, 16000, name=src)
+    traj = np.asarray(synth.predict(clip), dtype=float)
+    # No phones are known: the animation's alignment is one silence-labelled span of the audio.
+    span = Alignment([SILENCE], [0.0], [clip.duration], source=src)
+    meta = {"source": "audio", "method": "audio-driven model (reads the audio; no alignment"
+            + (", the transcript is not used)" if text is not None else ")"),
+            "model": model_name, "model_alphabet": "", "input_alphabet": "", "phones": [], "model_phones": [],
+            "approximations": [], "guessed_words": [], "rate": 1.0, "duration": clip.duration,
+            "seconds": time.perf_counter() - t0}
+    return SpeechAnimation(traj, list(synth.channels_), float(synth.frame_rate_), span, span, None, meta)
 
 
 def _dictionary_stress(phones: Alignment, words: Alignment | None) -> list[str] | None:

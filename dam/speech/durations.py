@@ -305,14 +305,16 @@ class DurationModel:
         ModelFileError
             Missing, corrupt or foreign file, or a model that is not a duration model.
         """
-        from dam.modelfile import ModelFileError, _decode, read_model_file
+        from dam.modelfile import ModelFileError, _decode, check_state, read_model_file
         meta, arrays = read_model_file(path)
         if meta["model"] != cls.name:
             raise ModelFileError(f"{path}: field 'model' is {meta['model']!r}, expected {cls.name!r} "
                                  "(a duration model)")
         try:
+            state = _decode(meta["state"], arrays)
+            check_state(cls, state, path)  # learned-attribute names only (dam.modelfile)
             model = cls(**_decode(meta["params"], arrays))
-            model._set_state(_decode(meta["state"], arrays))
+            model._set_state(state)
             model.coef_ = np.asarray(model.coef_, dtype=float)
             if model.coef_.shape != (len(model.features_),):
                 raise ValueError("coef_ and features_ differ in length")

@@ -243,5 +243,23 @@ def test_bad_parameters_are_refused(bad):
         HMMSynthesizer(**bad).fit(_hmm_corpus(TRUE_MEANS, TRUE_DURATIONS, n_utts=2))
 
 
+def test_inspection_names_unknown_phones():
+    model = HMMSynthesizer(n_states=3, context=0, min_occupancy=5).fit(_hmm_corpus(TRUE_MEANS, TRUE_DURATIONS,
+                                                                                   n_utts=3))
+    with pytest.raises(ValueError, match="zz"):
+        model.state_gaussian(["zz"], 0)
+    with pytest.raises(ValueError, match="3 states"):
+        model.tied_state(["aa"], 3)
+
+
+def test_merge_silences_joins_only_adjacent_silences():
+    from baselines.hmm import merge_silences
+    a = dam.Alignment(["aa", "p", "sil", "aa"], [0.07, 0.1, 0.2, 0.3], [0.1, 0.2, 0.3, 0.4])  # gap -> silence
+    assert a.labels == ("sil", "aa", "p", "sil", "aa")
+    b = merge_silences(a.shifted(0.05))  # the new leading gap joins the first silence
+    assert b.labels == a.labels and b.starts[1] == pytest.approx(0.12) and b.ends[0] == pytest.approx(0.12)
+    assert merge_silences(a) is a
+
+
 def test_registered():
     assert dam.registry.get("hmm") is HMMSynthesizer

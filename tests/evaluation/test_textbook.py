@@ -16,15 +16,24 @@ def fitted():
 
 
 def _data_axes(fig):
-    return [ax for ax in fig.axes if ax.get_visible() and (ax.lines or ax.collections or ax.patches)]
+    """Panels with data (not the phone tiers, whose y axis is "phones")."""
+    return [ax for ax in fig.axes if ax.get_visible() and (ax.lines or ax.collections or ax.patches)
+            and ax.get_ylabel() != "phones" and not ax.get_label() == "<colorbar>"]
 
 
 def _labelled(fig):
-    assert fig._suptitle is not None and fig._suptitle.get_text()
-    for ax in _data_axes(fig):
-        assert ax.get_ylabel().strip(), ax.get_title()
-    # every column ends in an axis that says what x is
-    assert any(ax.get_xlabel().strip() for ax in fig.axes)
+    """A title, and every row of panels has a y label, every column an x label (small multiples
+    label the row once, at the left, and the column once, at the bottom)."""
+    assert fig._suptitle is not None and fig._suptitle.get_text().strip()
+    fig.canvas.draw()
+    panels = [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
+    rows, cols = {}, {}
+    for ax in panels:
+        box = ax.get_position()
+        rows.setdefault(round(box.y0, 2), []).append(ax.get_ylabel().strip())
+        cols.setdefault(round(box.x0, 2), []).append(ax.get_xlabel().strip())
+    assert all(any(labels) for labels in rows.values()), rows
+    assert all(any(labels) for labels in cols.values()), cols
 
 
 def test_phone_sequence_lays_phones_end_to_end():
@@ -44,7 +53,10 @@ def test_dominance_sum_draws_eq1_and_the_weighted_average(fitted):
     a = phone_sequence("sil m uw s iy sil", 0.12)
     fig = plot_dominance_sum(model, a, channel=1, metadata=train.metadata)
     _labelled(fig)
-    ax_d, ax_share, ax_out = _data_axes(fig)[:3]
+    by_title = {ax.get_title().split(",")[0]: ax for ax in _data_axes(fig)}
+    ax_d = by_title["dominance of each segment"]
+    ax_share = by_title["how much each segment counts at every instant"]
+    ax_out = next(ax for t, ax in by_title.items() if t.startswith("animemes"))
     rows = model.explain(a)
     curves = [ln for ln in ax_d.lines if np.size(ln.get_xdata()) > 2]  # not the phone boundaries
     t = np.asarray(curves[0].get_xdata())

@@ -16,8 +16,8 @@ from dam.cli import main
 from dam.corpus import Alignment, DataError
 from dam.crossmap.outlines import CONTOURS, tract_outlines, vtl_shape
 from dam.datasets.vtl import VTL_CHANNELS
-from dam.export import export
 from dam.export import articulators as art
+from dam.export import export
 
 FR = 100.0
 

@@ -216,8 +216,9 @@ def test_hand_rig_gets_the_animation_matched_by_name_and_mapping(tmp_path, valid
         np.testing.assert_allclose(W[:, 2], 0.25)                       # undriven: rest weight
         t2, W2, names2 = anim["teeth"]
         np.testing.assert_allclose(W2[:, 0], values[:, 0], atol=1e-6)
-        # the rig's geometry is carried over unchanged
+        # the rig's geometry is carried over unchanged, its image file moved into the buffer
         doc, acc = load_gltf(p)
+        assert "uri" not in doc["images"][0] and doc["images"][0]["mimeType"] == "image/png"
         np.testing.assert_array_equal(acc(doc["meshes"][0]["primitives"][0]["targets"][1]["POSITION"]),
                                       np.array([[0.2, 0, 0], [-0.2, 0, 0], [0, 0, 0]], dtype="<f4"))
 

@@ -294,3 +294,25 @@ def test_zero_weights_of_the_search_are_an_ablation_not_a_crash():
             assert np.isfinite(cost)
             assert np.isfinite(model.predict(u.alignment)).all()
         model.set_params(w_c=1000.0, w_s=1.0)
+
+
+@pytest.mark.filterwarnings("ignore::dam.base.ConvergenceWarning")
+def test_predict_is_stateless_and_sees_coefficients_changed_in_place(tmp_path):
+    """Issue 11: predict kept caches keyed by id(coef_), stale after an in-place change."""
+    import dam
+    from dam.model.estimator import DAM
+    train = dam.datasets.load("tiny")
+    model = DAM(max_iter=2, n_resample=8, min_occurrences=4, min_mode_size=2, mode_preference="median").fit(train)
+    a = train[1].alignment
+    names = set(vars(model))
+    y0 = model.predict(a)
+    assert set(vars(model)) == names                       # predict adds nothing
+    model.coef_ *= 2.0                                     # in place: same object, same id
+    model.sigma_[:] = model.sigma_ * 0.5
+    y1 = model.predict(a)
+    assert set(vars(model)) == names
+    model.save(tmp_path / "m.dam")
+    fresh = dam.load(tmp_path / "m.dam")                   # the graph rebuilt at load, from the changed state
+    np.testing.assert_allclose(y1, fresh.predict(a), rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(model.select_modes(a)[0], fresh.select_modes(a)[0])
+    assert not np.allclose(y0, y1)

@@ -76,6 +76,18 @@ def test_atomic_write_keeps_the_permissions_of_the_file_it_replaces(tmp_path):
     assert os.stat(path).st_mode & 0o777 == 0o640
 
 
+def test_a_new_file_gets_the_usual_permissions_not_the_temporary_files(tmp_path):
+    umask = os.umask(0o022)
+    try:
+        with atomic_write(tmp_path / "new.txt") as fh:
+            fh.write("x")
+        plain = tmp_path / "plain.txt"
+        plain.write_text("x")  # what open() would have made
+    finally:
+        os.umask(umask)
+    assert os.stat(tmp_path / "new.txt").st_mode & 0o777 == os.stat(plain).st_mode & 0o777 == 0o644
+
+
 def test_atomic_path_and_directory_errors_name_the_path(tmp_path):
     with pytest.raises(OutputPathError, match="missing.*does not exist"):
         with atomic_path(tmp_path / "missing" / "x.csv"):
@@ -166,7 +178,8 @@ def test_every_writer_goes_through_the_atomic_helpers():
     from pathlib import Path
     root = Path(dam.__file__).parent
     pattern = re.compile(r"open\([^)]*['\"](w|wb|a|x)['\"]|\.write_text\(|\.write_bytes\(|np\.save\(|"
-                         r"np\.savez|savetxt\(|\.savefig\(|\.tofile\(")
+                         r"np\.savez|savetxt\(|\.savefig\(|\.tofile\(|wavfile\.write\(|soundfile\.write\(|"
+                         r"\btg\.save\(|json\.dump\(")
     allowed = {"corpus/atomic.py"}  # the mechanism itself; scratch files say "not an output"
     offenders = []
     for path in sorted(root.rglob("*.py")):

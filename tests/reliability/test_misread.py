@@ -212,3 +212,15 @@ def test_a_refused_write_leaves_no_file_and_keeps_the_old_one(tmp_path):
         write_csv(np.array([[1.0], [np.nan]]), ["x"], csv)
     assert csv.read_bytes() == before
     assert sorted(os.listdir(tmp_path)) == ["u.csv"]
+
+
+def test_a_prediction_too_large_to_hold_is_refused_before_allocation(tiny_train):
+    """A day at the highest frame rate a model may have: refused, naming the duration."""
+    from dam.base import MAX_PREDICTION_VALUES
+    from dam.corpus.data import MAX_FRAME_RATE
+    model = dam.make("phone-mean").fit(tiny_train)
+    model.frame_rate_ = MAX_FRAME_RATE
+    long = dam.Alignment(["aa"], [0.0], [MAX_DURATION], source="day.lab")
+    assert long.n_frames(MAX_FRAME_RATE) * 4 > MAX_PREDICTION_VALUES
+    with pytest.raises(dam.DataError, match="day.lab: field 'duration'"):
+        model.predict(long)

@@ -187,3 +187,12 @@ def test_a_model_whose_state_breaks_its_schema_is_not_written(tiny_train, tmp_pa
     with pytest.raises(ModelFileError, match="state.table_"):
         model.save(tmp_path / "m.dam")
     assert not (tmp_path / "m.dam").exists()
+
+
+def test_every_numpy_runtime_model_declares_its_state():
+    """A model a runtime loads with numpy alone must say what its file holds."""
+    from dam.modelfile import _declares_schema
+    for name in dam.registry.names():
+        ok, _ = dam.registry.available(name)
+        if ok and dam.registry.get(name).get_tags()["numpy_runtime"]:
+            assert _declares_schema(dam.registry.get(name)), f"{name} declares no _state_schema"

@@ -60,6 +60,17 @@ def test_predict_refuses_to_replace_recorded_data_beside_an_alignment(model_file
     assert target.read_bytes() == before
 
 
+def test_predict_replaces_its_own_earlier_output_and_corpus_files_only_with_overwrite(model_file, small_corpus_dir,
+                                                                                     tmp_path):
+    alignment = small_corpus_dir / "tiny000.TextGrid"
+    out = tmp_path / "prediction.csv"
+    for _ in range(2):  # an output that is no corpus's data is simply replaced (atomically)
+        assert run("predict", model_file, alignment, "-o", out)[0] == 0
+    target = small_corpus_dir / "tiny001.csv"
+    code, _, _ = run("predict", model_file, alignment, "-o", target, "--overwrite")
+    assert code == 0 and target.read_bytes() == out.read_bytes()
+
+
 def test_predict_dash_writes_csv_to_standard_output(model_file, small_corpus_dir):
     alignment = small_corpus_dir / "tiny000.TextGrid"
     code, out, _ = run("predict", model_file, alignment, "-o", "-")

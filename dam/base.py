@@ -27,7 +27,7 @@ from dam.modelfile import ModelFileError, StateCounts, StateNames, load, write_m
 #: 300 channels): larger is refused before anything is allocated (issue 12).
 MAX_PREDICTION_VALUES = 2 ** 28
 
-__all__ = ["Synthesizer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
+__all__ = ["Estimator", "Synthesizer", "Transformer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
            "InvalidParameterError", "Interval", "Options", "TupleOf", "Tag", "TAGS", "clone", "load", "predict_inputs"]
 
 
@@ -93,7 +93,98 @@ TAGS: dict[str, Tag] = {t.name: t for t in (
 )}
 
 
-class Synthesizer:
+class Estimator:
+    """Hyperparameters the scikit-learn way, for every estimator of dam.
+
+    ``__init__`` only stores keyword-only hyperparameters; ``get_params``/``set_params``
+    read and write them; ``_parameter_constraints`` declares what each may be (checked by
+    :meth:`_validate_params` at the start of ``fit``); ``_preset`` makes a subclass a
+    preset of its parent. :class:`Synthesizer` (phones or audio to trajectories) and
+    :class:`Transformer` (frames to frames: the cross-mapping estimators) build on it.
+
+    Examples
+    --------
+    >>> import dam
+    >>> from dam.base import Estimator, Interval
+    >>> class Smoother(Estimator):
+    ...     _parameter_constraints = {"width": [Interval(int, 1, None, closed="left")]}
+    ...     def __init__(self, *, width=3):
+    ...         self.width = width
+    >>> Smoother(width=5)
+    Smoother(width=5)
+    >>> Smoother(width=0)._validate_params()
+    Traceback (most recent call last):
+    ...
+    dam._params.InvalidParameterError: Smoother: parameter 'width' is 0; it must be an int in [1, inf)
+    """
+
+    _parameter_constraints: dict = {}
+    _preset: dict = {}
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("_preset"):
+            _apply_preset(cls, dict(cls.__dict__["_preset"]))
+
+    # -- hyperparameters (scikit-learn conventions) ------------------------
+    @classmethod
+    def _param_names(cls) -> list[str]:
+        sig = inspect.signature(cls.__init__)
+        names = []
+        for p in sig.parameters.values():
+            if p.name == "self" or p.kind in (p.VAR_KEYWORD, p.VAR_POSITIONAL):
+                continue
+            names.append(p.name)
+        return sorted(names)
+
+    def get_params(self, deep: bool = True) -> dict:
+        """Hyperparameters as a dict (``deep`` is accepted for compatibility)."""
+        return {k: getattr(self, k) for k in self._param_names()}
+
+    def set_params(self, **params) -> "Estimator":
+        valid = set(self._param_names())
+        for k, v in params.items():
+            if k not in valid:
+                raise ValueError(f"{type(self).__name__}: unknown parameter {k!r}; "
+                                 f"valid parameters are {sorted(valid)}")
+            setattr(self, k, v)
+        return self
+
+    def __repr__(self) -> str:
+        defaults = {p.name: p.default for p in inspect.signature(type(self).__init__).parameters.values()}
+        changed = {k: v for k, v in self.get_params().items() if not _same(defaults.get(k), v)}
+        inner = ", ".join(f"{k}={v!r}" for k, v in changed.items())
+        return f"{type(self).__name__}({inner})"
+
+    @classmethod
+    def get_parameter_constraints(cls) -> dict:
+        """``{parameter: [constraint, ...]}`` of every parameter that declares one (merged down the
+        class hierarchy, subclasses overriding)."""
+        merged: dict = {}
+        for klass in reversed(cls.__mro__):
+            merged.update(klass.__dict__.get("_parameter_constraints") or {})
+        names = set(cls._param_names())
+        return {k: v for k, v in merged.items() if k in names}
+
+    def _validate_params(self) -> None:
+        """Check the hyperparameters against their declared constraints, then the relations
+        between them (:meth:`_check_param_relations`).
+
+        Raises
+        ------
+        InvalidParameterError
+            Naming the class, the parameter, the value and what is allowed.
+        """
+        validate_params(type(self).__name__, self.get_parameter_constraints(), self.get_params())
+        self._check_param_relations()
+        if hasattr(self, "_check_params"):  # dam 0.1's hand-written hook, still honoured; declare constraints instead
+            self._check_params()
+
+    def _check_param_relations(self) -> None:
+        """Check rules that tie parameters together (override; each parameter alone is
+        declared in ``_parameter_constraints``). Raise :class:`InvalidParameterError`."""
+
+class Synthesizer(Estimator):
     """Base class for all synthesizers.
 
     Class attributes
@@ -145,7 +236,6 @@ class Synthesizer:
         "random_state": ["random_state"],
         "verbose": [Interval(int, 0, None, closed="left"), "boolean"],
     }
-    _preset: dict = {}
     # What a model file must hold (dam.modelfile.check_state, at save and at load): the
     # state every synthesizer has. A subclass declares its own learned attributes the same
     # way; then its schema is complete and a file holding anything else is refused.
@@ -155,41 +245,6 @@ class Synthesizer:
         "phone_counts_": StateCounts("n_phones"),
     }
     _state_schema_common = True
-
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        if cls.__dict__.get("_preset"):
-            _apply_preset(cls, dict(cls.__dict__["_preset"]))
-
-    # -- hyperparameters (scikit-learn conventions) ------------------------
-    @classmethod
-    def _param_names(cls) -> list[str]:
-        sig = inspect.signature(cls.__init__)
-        names = []
-        for p in sig.parameters.values():
-            if p.name == "self" or p.kind in (p.VAR_KEYWORD, p.VAR_POSITIONAL):
-                continue
-            names.append(p.name)
-        return sorted(names)
-
-    def get_params(self, deep: bool = True) -> dict:
-        """Hyperparameters as a dict (``deep`` is accepted for compatibility)."""
-        return {k: getattr(self, k) for k in self._param_names()}
-
-    def set_params(self, **params) -> "Synthesizer":
-        valid = set(self._param_names())
-        for k, v in params.items():
-            if k not in valid:
-                raise ValueError(f"{type(self).__name__}: unknown parameter {k!r}; "
-                                 f"valid parameters are {sorted(valid)}")
-            setattr(self, k, v)
-        return self
-
-    def __repr__(self) -> str:
-        defaults = {p.name: p.default for p in inspect.signature(type(self).__init__).parameters.values()}
-        changed = {k: v for k, v in self.get_params().items() if not _same(defaults.get(k), v)}
-        inner = ", ".join(f"{k}={v!r}" for k, v in changed.items())
-        return f"{type(self).__name__}({inner})"
 
     @classmethod
     def get_tags(cls) -> dict:
@@ -209,34 +264,6 @@ class Synthesizer:
                 TAGS[k].check(klass.__name__, v)
                 tags[k] = v
         return tags
-
-    @classmethod
-    def get_parameter_constraints(cls) -> dict:
-        """``{parameter: [constraint, ...]}`` of every parameter that declares one (merged down the
-        class hierarchy, subclasses overriding)."""
-        merged: dict = {}
-        for klass in reversed(cls.__mro__):
-            merged.update(klass.__dict__.get("_parameter_constraints") or {})
-        names = set(cls._param_names())
-        return {k: v for k, v in merged.items() if k in names}
-
-    def _validate_params(self) -> None:
-        """Check the hyperparameters against their declared constraints, then the relations
-        between them (:meth:`_check_param_relations`).
-
-        Raises
-        ------
-        InvalidParameterError
-            Naming the class, the parameter, the value and what is allowed.
-        """
-        validate_params(type(self).__name__, self.get_parameter_constraints(), self.get_params())
-        self._check_param_relations()
-        if hasattr(self, "_check_params"):  # dam 0.1's hand-written hook, still honoured; declare constraints instead
-            self._check_params()
-
-    def _check_param_relations(self) -> None:
-        """Check rules that tie parameters together (override; each parameter alone is
-        declared in ``_parameter_constraints``). Raise :class:`InvalidParameterError`."""
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
@@ -430,6 +457,25 @@ class Synthesizer:
         return model
 
 
+class Transformer(Estimator):
+    """Base class of the frame-to-frame estimators (:mod:`dam.crossmap`): ``fit(X)`` learns
+    attributes ending in ``_`` and returns ``self``; ``transform(X)`` maps frames; ``X`` is an
+    array of frames or a :class:`~dam.Corpus`. The same hyperparameter machinery as
+    :class:`Synthesizer` (:class:`Estimator`), so ``dam.clone`` and scikit-learn's ``clone``
+    and pipelines work on both.
+    """
+
+    def fit(self, X, y=None) -> "Transformer":  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def transform(self, X):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def fit_transform(self, X, y=None):
+        """``fit(X)`` then ``transform(X)``."""
+        return self.fit(X, y).transform(X)
+
+
 def predict_inputs(model, corpus: Corpus) -> list:
     """What ``model.predict`` reads for every utterance of ``corpus`` (see
     :meth:`Synthesizer.predict_inputs`); alignments for a model without that method."""
@@ -437,7 +483,7 @@ def predict_inputs(model, corpus: Corpus) -> list:
     return method(corpus) if method is not None else corpus.alignments
 
 
-def clone(estimator: Synthesizer) -> Synthesizer:
+def clone(estimator: Estimator) -> Estimator:
     """An unfitted copy of ``estimator`` with the same hyperparameters (deep-copied).
 
     Examples
@@ -452,7 +498,7 @@ def clone(estimator: Synthesizer) -> Synthesizer:
 
 
 def _apply_preset(cls: type, preset: dict) -> None:
-    """Give ``cls`` its parent's ``__init__`` with the defaults of ``preset`` (see ``Synthesizer._preset``)."""
+    """Give ``cls`` its parent's ``__init__`` with the defaults of ``preset`` (see ``Estimator._preset``)."""
     if "__init__" in cls.__dict__:
         raise TypeError(f"{cls.__name__}: a preset declares _preset and no __init__ of its own")
     parent_init = cls.__init__

@@ -39,8 +39,8 @@ from typing import Callable
 
 import numpy as np
 
-from sklearn.base import BaseEstimator, TransformerMixin
 
+from dam.base import Interval, Transformer
 from dam.corpus.data import DataError
 from dam.crossmap.rig import LinearRig, as_rig, check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
@@ -245,7 +245,7 @@ def _fit_controls(vertices, rig, bounds, n_controls, x0, jacobian, max_nfev):
     return out
 
 
-class CrossMapper(BaseEstimator, TransformerMixin):
+class CrossMapper(Transformer):
     """Cross-map captured shapes to a target character's controls (Appendix A).
 
     Parameters
@@ -278,6 +278,14 @@ class CrossMapper(BaseEstimator, TransformerMixin):
     n_dims_ : int
     """
 
+    _parameter_constraints = {
+        "n_controls": [None, Interval(int, 1, None, closed="left")],
+        "damping": [Interval(float, 0.5, 1.0, closed="left")],
+        "max_frames": [Interval(int, 1, None, closed="left")],
+        "max_iter": [Interval(int, 1, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
     def __init__(self, *, key_shapes=None, target_key_shapes=None, rig=None, n_controls=None,
                  control_names=None, bounds=(0.0, 1.0), preference=None, damping=0.9,
                  max_frames=2000, max_iter=1000, random_state=0):
@@ -300,6 +308,7 @@ class CrossMapper(BaseEstimator, TransformerMixin):
         ----------
         X : array (n_frames, n_dims), Utterance, Corpus, or a list of these
         """
+        self._validate_params()
         frames = stack_frames(X, "X")
         if self.key_shapes is None:
             self.key_shapes_, self.key_frame_indices_ = find_key_shapes(

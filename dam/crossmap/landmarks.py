@@ -38,8 +38,8 @@ from __future__ import annotations
 from typing import Callable, Sequence
 
 import numpy as np
-from sklearn.base import BaseEstimator, TransformerMixin
 
+from dam.base import Interval, Transformer
 from dam.corpus.data import DataError
 from dam.crossmap.rig import LinearRig, as_rig, check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
@@ -273,7 +273,7 @@ def solve_landmarks(targets, rig, *, alpha: float = 0.01, bounds=(0.0, 1.0), n_p
     return (out, info) if return_info else out
 
 
-class LandmarkSolver(BaseEstimator, TransformerMixin):
+class LandmarkSolver(Transformer):
     """Landmark-to-rig solve of Medina et al. (2022), Section 7.
 
     ``fit`` learns the similarity transform from the captured neutral pose to
@@ -306,6 +306,14 @@ class LandmarkSolver(BaseEstimator, TransformerMixin):
     captured_neutral_, rig_neutral_ : ndarray (n_coords,) or None
     """
 
+    _parameter_constraints = {
+        "n_params": [None, Interval(int, 1, None, closed="left")],
+        "alpha": [Interval(float, 0, None, closed="left")],
+        "landmark_dim": [Interval(int, 1, 3, closed="both")],
+        "max_iter": [Interval(int, 1, None, closed="left")],
+        "tol": [Interval(float, 0, None, closed="left")],
+    }
+
     def __init__(self, *, rig=None, n_params=None, alpha=0.01, bounds=(0.0, 1.0), symmetric_pairs=None,
                  jacobian=None, neutral_params=None, landmark_dim=2, param_names=None,
                  max_iter=500, tol=1e-12):
@@ -329,6 +337,7 @@ class LandmarkSolver(BaseEstimator, TransformerMixin):
 
     def fit(self, X=None, y=None) -> "LandmarkSolver":
         """Fit the neutral alignment on captured neutral-pose frames (their mean), or none if X is None."""
+        self._validate_params()
         n = self._n()
         thN = np.zeros(n) if self.neutral_params is None else check_frames(self.neutral_params,
                                                                            "neutral_params", n_dims=n)[0]

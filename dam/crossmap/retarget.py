@@ -38,8 +38,8 @@ Reading of the paper's ambiguities (each a decision here):
 from __future__ import annotations
 
 import numpy as np
-from sklearn.base import BaseEstimator, TransformerMixin
 
+from dam.base import Interval, Transformer
 from dam.corpus.data import DataError
 from dam.crossmap.rig import check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
@@ -166,7 +166,7 @@ def rig_space_retarget(w, rig_poses, rig_neutral, *, relative: bool = False) -> 
     return W @ D + r0
 
 
-class RigSpaceRetargeter(BaseEstimator, TransformerMixin):
+class RigSpaceRetargeter(Transformer):
     """Rig-space retargeting of Taylor et al. (2017), Section 6.
 
     Parameters
@@ -197,6 +197,11 @@ class RigSpaceRetargeter(BaseEstimator, TransformerMixin):
         Share of the reference variance in each mode (the paper's "91% energy").
     """
 
+    _parameter_constraints = {
+        "n_modes": [Interval(int, 1, None, closed="left")],
+        "relative": ["boolean"],
+    }
+
     def __init__(self, *, n_modes=4, u=(-3.0, 3.0), rig_poses=None, rig_neutral=None,
                  relative=False, rig_names=None, bounds=None):
         self.n_modes = n_modes
@@ -209,6 +214,7 @@ class RigSpaceRetargeter(BaseEstimator, TransformerMixin):
 
     def fit(self, X, y=None) -> "RigSpaceRetargeter":
         """Principal modes of the reference trajectories (array, Utterance, Corpus or list)."""
+        self._validate_params()
         frames = stack_frames(X, "X")
         source = getattr(X, "source", None) or getattr(X, "name", None) or "reference trajectories"
         self.mean_, self.components_, self.eigenvalues_ = principal_modes(frames, self.n_modes, source=source)

@@ -618,7 +618,8 @@ class DAMPaper(DAM):
 
 def _weighted(w: float, cost: np.ndarray) -> np.ndarray:
     """``w * cost`` with a missing mode's +inf kept +inf (also for ``w = 0``, an ablation)."""
-    return np.where(np.isinf(cost), np.inf, float(w) * cost)
+    with np.errstate(invalid="ignore"):       # 0 * inf, masked out by the where
+        return np.where(np.isinf(cost), np.inf, float(w) * cost)
 
 
 def _context_counts(corpus, local, phone_modes) -> dict:

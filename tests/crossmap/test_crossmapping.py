@@ -235,3 +235,22 @@ def test_transform_before_fit_is_a_not_fitted_error():
     for est in (CrossMapper(), RigSpaceRetargeter(), LandmarkSolver(rig=np.eye(2))):
         with pytest.raises(NotFittedError, match=f"{type(est).__name__} is not fitted"):
             est.transform(np.ones((3, 2)))
+
+
+@pytest.mark.parametrize("cls, bad", [("CrossMapper", {"damping": 1.5}), ("CrossMapper", {"max_iter": 0}),
+                                      ("RigSpaceRetargeter", {"n_modes": 0}),
+                                      ("LandmarkSolver", {"alpha": -1.0})])
+def test_crossmap_estimators_follow_dams_one_contract(cls, bad):
+    """One estimator framework: the cross-mapping transformers are dam Estimators (declared
+    constraints, get/set_params, dam.clone), not a second, scikit-learn-based one."""
+    import dam
+    from dam.base import Estimator, InvalidParameterError, Transformer
+    klass = getattr(dam.crossmap, cls)
+    assert issubclass(klass, Transformer) and issubclass(klass, Estimator)
+    assert not any(c.__module__.startswith("sklearn") for c in klass.__mro__)
+    est = klass(**bad)
+    assert dam.clone(est).get_params() == est.get_params()
+    (name, value), = bad.items()
+    frames = np.random.default_rng(0).normal(size=(30, 6))
+    with pytest.raises(InvalidParameterError, match=name):
+        est.fit(frames)

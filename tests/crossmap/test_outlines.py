@@ -61,7 +61,7 @@ def test_outline_corpus_keeps_alignments_and_reorders_channels():
     al = Alignment(["a", "i"], [0, 0.02], [0.02, 0.04])
     corpus = Corpus([Utterance(al, states[:, perm], 100.0, [VTL_CHANNELS[k] for k in perm], name="ai")])
     out = outline_corpus(corpus, contours=["tongue", "lower"], n_points=6)
-    assert out[0].alignment == al and out.channels == tuple(outline_channels(["tongue", "lower"], 6))
+    assert out[0].alignment == corpus[0].alignment and out.channels == tuple(outline_channels(["tongue", "lower"], 6))
     np.testing.assert_allclose(out[0].trajectory, tract_outlines(states, contours=["tongue", "lower"], n_points=6))
     bad = Corpus([Utterance(al, states[:, :3], 100.0, ["a", "b", "c"], name="x")])
     with pytest.raises(DataError, match="missing HX"):

@@ -59,12 +59,12 @@ def render_demo() -> str:
     d = _load("compare_demo.json")
     m = d["machine"]
     n_test = max(r["n_utterances"] or 0 for r in d["summary"] if r["status"] == "ok")
-    cpu = f"{d['cpu_seconds']:.0f} CPU seconds in all" if d.get("cpu_seconds") is not None else ""
-    lines = [f"What it prints (`benchmarks/results/compare_demo.md`: {m['date']}, {m['cpu']}, "
-             f"{d['train_utterances']} training utterances ({d['train_minutes']} min), channels "
-             f"{', '.join(d['channels'])}; {cpu}, {d['wall_seconds']:.0f} s wall on a machine shared with "
-             f"other jobs (load average {d['load_average_start'][0]:.1f}); the longest single fit "
-             f"{d['fit_seconds_longest']:.0f} s):", ""]
+    lines = [f"What it prints (`benchmarks/results/compare_demo.md`, `python benchmarks/bench_compare.py demo`: "
+             f"{m['date']}, {m['cpu']}, {d['train_utterances']} training utterances ({d['train_minutes']} min), "
+             f"channels {', '.join(d['channels'])}). The run took {d['cpu_seconds']:.0f} CPU seconds, so about "
+             f"{d['two_idle_cores_seconds']:.0f} s on two idle cores (the tasks as joblib's two workers would "
+             f"share them); it was measured on a machine shared with other jobs (load average "
+             f"{d['load_average_start'][0]:.1f}), which is why the fit seconds below are longer:", ""]
     lines += _compare_table(d["summary"], d["best"])
     ok = [r for r in d["summary"] if r["status"] == "ok"]
     rank = {r["model"]: k for k, r in enumerate(ok, start=1)}

@@ -62,7 +62,7 @@ def main(argv=None) -> int:
             warnings.simplefilter("ignore")
             model = dam.make(name).fit(tr)
         rmse = float(dam.evaluate(model, te).rmse)
-        fig = plot_sequence({name: model}, utt.alignment, [channel], truth=utt.trajectory, metadata=meta,
+        fig = plot_sequence({name: model}, utt, [channel], truth=utt.trajectory, metadata=meta,
                             title=f"{name} on held-out {where} utterance {utt.name} (test RMSE {rmse:.3f})",
                             panel_size=(5.6, 1.5), legend="lower")
         plotting.save(fig, path, dpi=64)

@@ -56,17 +56,18 @@ def cmd_compare(args) -> int:
 
 
 def add_demo(sub) -> None:
-    p = sub.add_parser("demo", help="fit the models on the bundled corpus and compare them (about a minute)",
+    p = sub.add_parser("demo", help="fit the models on the bundled corpus and compare them (under a minute)",
                        description="Fit the DAM and the classical models it is compared with on the bundled "
-                                   "VocalTractLab corpus's training part (the first 4 minutes), score them on its "
-                                   "held-out part on three channels (jaw, lips, tongue tip) and print the "
-                                   "comparison table; tables and figures go to --out. About a minute on two "
-                                   "cores; --full runs every demo model on six channels and all the training "
-                                   "data (about 3 minutes).")
+                                   "VocalTractLab corpus's training part, score them on its held-out part on "
+                                   "three channels (jaw, lips, tongue tip) and print the comparison table; tables "
+                                   "and figures go to --out. Under a minute on two cores; --full adds the 1993 "
+                                   "Cohen-Massaro model and the linguistic decision tree on six channels "
+                                   "(several minutes).")
     p.add_argument("--corpus", default="vtl", help="bundled corpus (default: vtl; 'tiny' takes seconds)")
     p.add_argument("--out", default="dam-demo", help="directory for the tables and figures (default: dam-demo)")
     p.add_argument("--jobs", type=int, default=2, help="parallel workers (default 2; -1: all cores)")
-    p.add_argument("--full", action="store_true", help="all training data, six channels, eight models (slower)")
+    p.add_argument("--full", action="store_true",
+                   help="six channels and eight models, Cohen-Massaro (1993) and the linguistic tree too (slower)")
     p.add_argument("--all-channels", action="store_true", help="every channel of the corpus (slower)")
     p.set_defaults(func=cmd_demo)
 

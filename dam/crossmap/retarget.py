@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam.base import Interval, Transformer
+from dam.base import Interval, Options, Transformer
 from dam.corpus.data import DataError
 from dam.crossmap.rig import check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
@@ -198,7 +198,7 @@ class RigSpaceRetargeter(Transformer):
     """
 
     _parameter_constraints = {
-        "n_modes": [Interval(int, 1, None, closed="left")],
+        "n_modes": [Interval(int, 1, None, closed="left"), Options({"auto"})],
         "relative": ["boolean"],
     }
 

@@ -117,7 +117,7 @@ def plot_dominance_sum(model, alignment: Alignment, channel: int = 0, *, metadat
     return fig
 
 
-def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=None, metadata=None,
+def plot_sequence(models: dict, alignment, channels=None, *, truth=None, metadata=None,
                   name: str = "", title: str | None = None, panel_size=(3.4, 1.3), legend: str = "right"):
     """One phone sequence under several fitted models: a column per model, a row per channel.
 
@@ -125,7 +125,8 @@ def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=No
     ----------
     models : dict
         Label -> fitted synthesizer (same channels and frame rate).
-    alignment : Alignment
+    alignment : Alignment or Utterance
+        The phones; an Utterance (its alignment, and its audio for models that read audio).
     channels : sequence of str, optional
         Rows; default all channels of the first model (at most 6).
     truth : ndarray, shape (n_frames, n_channels), optional
@@ -156,6 +157,7 @@ def plot_sequence(models: dict, alignment: Alignment, channels=None, *, truth=No
     cols = [names.index(c) for c in channels]
     fr = first.frame_rate_
     preds = {label: np.asarray(m.predict(alignment)) for label, m in models.items()}
+    alignment = getattr(alignment, "alignment", alignment)  # an Utterance: its phones
     seq = name or " ".join(alignment.labels)
     what = "against the recording (black)" if truth is not None else "(no recording: the models only)"
     title = title or f"/{seq}/ under {len(models)} model{'s' if len(models) > 1 else ''} {what}"

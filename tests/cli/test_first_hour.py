@@ -109,8 +109,9 @@ def test_compare_names_its_files_without_a_double_slash(tmp_path):
 def test_demo_says_what_it_does_before_doing_it(tmp_path):
     from dam.evaluation.compare import demo_plan
     plan = demo_plan("vtl")
-    assert len(plan["channels"]) == 3 and plan["train_minutes"] == 4.0 and len(plan["models"]) == 7
-    assert plan["description"].startswith("dam demo: fits 7 models") and "minute" in plan["description"]
+    assert len(plan["channels"]) == 3 and plan["train_minutes"] is None and len(plan["models"]) == 6
+    assert plan["description"].startswith("dam demo: fits 6 models") and "minute" in plan["description"]
+    assert "cohen-massaro" in plan["description"].split("--full")[1]
     done = _dam("demo", "--corpus", "tiny", "--out", "d", "--progress", "json", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     first = done.stderr.splitlines()[0]

@@ -1,5 +1,7 @@
 """Textbook figures (issue 18): a typed phone sequence, its dominance functions and their weighted sum,
 the same sequence under several models; every figure has a title and non-empty axis labels."""
+import warnings
+
 import numpy as np
 import pytest
 
@@ -11,8 +13,10 @@ from dam.evaluation.textbook import phone_sequence, plot_dominance_sum, plot_seq
 @pytest.fixture(scope="module")
 def fitted():
     train = dam.datasets.load("tiny")
-    return train, {"phone-mean": dam.make("phone-mean").fit(train),
-                   "dam": dam.make("dam", degree=2, max_iter=3).fit(train)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", dam.base.ConvergenceWarning)  # a short fit is enough to draw
+        return train, {"phone-mean": dam.make("phone-mean").fit(train),
+                       "dam": dam.make("dam", degree=2, max_iter=3).fit(train)}
 
 
 def _data_axes(fig):

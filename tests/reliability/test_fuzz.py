@@ -236,7 +236,12 @@ def test_command_lines_never_trace_back_or_damage_inputs(micro_model_file, small
     inputs = {a for a in argv if a != output and a and os.path.exists(a) and a != root}
     inputs.add(str(small_corpus_dir))  # never an output of anything
     before = {p: _digest(p) for p in inputs}
-    code, out, err = _run_cli(["-q"] + argv)
+    here = os.getcwd()
+    os.chdir(root)  # relative outputs ("x", "colour=red") land in the test's folder, not the checkout
+    try:
+        code, out, err = _run_cli(["-q"] + argv)
+    finally:
+        os.chdir(here)
     assert code in (0, 1, 2), (argv, code, err)
     assert "Traceback" not in err
     if code == 1:

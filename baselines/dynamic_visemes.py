@@ -207,15 +207,15 @@ class DynamicVisemes(Synthesizer):
         Weight of the smoothness (join) cost.
     crossfade : float, default 0.12
         Cross-fade length (s) at every join; 0 concatenates.
+    random_state : int, default 0
+        Seeds k-means.
+    unknown_phone : {"error", "fallback"}, default "error"
 
     Notes
     -----
     The three weights were chosen on a validation split of ``vtl:train``
     (80/20; held-out RMSE 0.336 with weights 1, 0.5 and a 0.04 s
     cross-fade, 0.305 with these), never on ``vtl:test``.
-    random_state : int, default 0
-        Seeds k-means.
-    unknown_phone : {"error", "fallback"}, default "error"
 
     Attributes
     ----------

@@ -150,7 +150,7 @@ def markdown(r) -> str:
                      f"{_f(row['fit_seconds'], '{:.1f}')} |")
     c = r["corpus"]
     v = r["visemenet"]
-    lines += ["", f"Trained on {c['train']}, scored on {c['test']}; channels {', '.join(c['channels'])} "
+    lines += ["", f"Train: {c['train']}; test: {c['test']}; channels {', '.join(c['channels'])} "
               f"(a subset: CPU is scarce); neural rows trained {r['epochs']} epochs with small networks. "
               "Every row, phone- or audio-driven, uses the same utterances (those with audio).", "",
               f"VisemeNet activations (a control is active more than 0.5 std from its rest): precision "
@@ -162,9 +162,10 @@ def markdown(r) -> str:
         lines.append(f"| {label} | {_f(x['ms_per_audio_second'], '{:.2f}')} | "
                      f"{_f(x.get('paper_ms'), '{:.3f}')} | {x.get('n_parameters', '')} |")
     m = r["machine"]
-    lines += ["", "Decoder rows: MFCC precomputed (cached), networks untrained (the cost does not depend on the "
-              "weights), hidden size 256 for the GRUs (the paper's is not stated; its GRU-2L has 3.95e6 "
-              f"parameters). Machine: {m.get('cpu', '')}, {m.get('cores', '')} cores, shared; {r['date']}.", ""]
+    lines += ["", "Decoder rows: MFCC (13 per frame at 100 Hz) precomputed and cached, networks untrained (the "
+              "cost does not depend on the weights), 256 units per GRU layer (the paper's size is not stated; its "
+              "GRU-2L has 3.95e6 parameters, its MLP 15:5 6.62e7). MFCC extraction is numpy on one core. Machine: "
+              f"{m.get('cpu', '')}, {m.get('cores', '')} cores, shared with other jobs; {r['date']}.", ""]
     return "\n".join(lines)
 
 

@@ -44,6 +44,8 @@ VARIANTS = [
     ("dam preference=median", "dam", {"mode_preference": "median"}),
     ("dam plain sum", "dam", {"normalize": False}),
     ("dam-paper", "dam-paper", {}),
+    ("dam-paper, modes by context alone (w_s=0)", "dam-paper", {"w_s": 0.0}),
+    ("dam-m0 plain sum, modes by context alone (w_s=0)", "dam-m0", {"normalize": False, "w_s": 0.0}),
     ("dam-m0 plain sum", "dam-m0", {"normalize": False}),
     ("dam-m0 single-mode", "dam-m0", {"modes": "single"}),
 ]

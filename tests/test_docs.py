@@ -32,6 +32,8 @@ def _public_objects():
 
 @pytest.mark.skipif(not DOCS.joinpath("conf.py").exists(), reason="run from a checkout: docs/ is not installed")
 def test_api_reference_builds(tmp_path):
+    import shutil
+    shutil.rmtree(DOCS / "api" / "generated", ignore_errors=True)  # autosummary's output: stale pages would fail
     out = subprocess.run([sys.executable, "-m", "sphinx", "-q", "-b", "html", "-d", str(tmp_path / "doctrees"),
                           str(DOCS), str(tmp_path / "html")], capture_output=True, text=True,
                          env={**os.environ, "MPLBACKEND": "Agg"})
@@ -61,7 +63,9 @@ def test_docstring_examples_run(qualname, tmp_path, monkeypatch):
     obj = _public_objects()[qualname]
     monkeypatch.chdir(tmp_path)  # examples that write files write here
     finder = doctest.DocTestFinder(recurse=False)
-    tests = [t for t in finder.find(obj, qualname, globs={"dam": dam}) if t.examples]
+    module = inspect.getmodule(obj)
+    # as doctest runs a module's examples: in the module's namespace
+    tests = [t for t in finder.find(obj, qualname, module=module, globs={**vars(module), "dam": dam}) if t.examples]
     if not tests:
         pytest.skip("no examples in this docstring")
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)

@@ -73,7 +73,7 @@ class PhoneEncoder:
         self.vocabulary = list(vocabulary)
 
     @classmethod
-    def fit(cls, corpus: Corpus) -> "PhoneEncoder":
+    def fit(cls, corpus: Corpus) -> PhoneEncoder:
         from dam.corpus import phone_vocabulary
         return cls(phone_vocabulary(corpus))
 

@@ -68,8 +68,8 @@ def add_vtl_audio(sub) -> None:
         description="Give a generated vtl corpus its audio, in place: VocalTractLab synthesizes each phrase again "
                     "from its gestural score (same seed, same phrases; every stored trajectory must come out bit "
                     "for bit), and 16 kHz 16-bit FLAC goes beside it as <stem>.flac. Phrases that have their FLAC "
-                    "are skipped (the cache): stop it any time and run it again. Audio costs about 2-4 s of CPU "
-                    "per second of speech (about 50 CPU-minutes for the whole bundled corpus).",
+                    "are skipped (the cache): stop it any time and run it again. Audio costs about 3 s of CPU "
+                    "per second of speech (about 35 CPU-minutes for the whole bundled corpus).",
         epilog="the whole bundled corpus: dam vtl-audio --fraction 1   (run it with nice on a shared machine)")
     p.add_argument("root", nargs="?", default=None,
                    help="directory with train/ and test/ (default: the bundled vtl corpus)")

@@ -319,7 +319,7 @@ class Utterance:
         Frames per second.
     channels : sequence of str, length n_channels
     audio : str, optional
-        Path of a WAV file with the utterance's audio.
+        Path of a WAV or FLAC file with the utterance's audio.
     name : str, optional
         Defaults to the alignment's source file stem.
     mask : array-like of bool, shape (n_frames, n_channels), optional

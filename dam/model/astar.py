@@ -447,7 +447,8 @@ class ModeGraph:
             bi = ls | rs
             if bi.any():
                 both = (ls[:, None] * smoothed(self.left[p, L]) + rs[:, None] * smoothed(self.right[p, R]))
-                prob[bi] = both[bi] / (ls + rs)[bi, None]
+                n_seen = ls.astype(float) + rs.astype(float)      # (bool + bool is a logical or)
+                prob[bi] = both[bi] / n_seen[bi, None]
                 level[multi[bi]] = 1
             if self.tri_codes.size:
                 code = (p * (B + 1) + L) * (B + 1) + R

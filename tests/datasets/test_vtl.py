@@ -229,14 +229,14 @@ def test_bundled_corpus_size_and_format(bundled):
 
 
 def test_bundled_corpus_splits_words_and_has_some_audio(bundled):
-    from scipy.io import wavfile
+    import soundfile
     train, test = bundled
     words = [{w for u in c.metadata["utterances"].values() for w in u["words"]} for c in (train, test)]
     assert words[0] and words[1] and not words[0] & words[1]
     assert sum(bool(u.audio) for u in train) >= 10 and sum(bool(u.audio) for u in test) >= 2
     with_audio = [u for c in (train, test) for u in c if u.audio]
     for u in with_audio[:3]:
-        rate, wav = wavfile.read(u.audio)
+        wav, rate = soundfile.read(u.audio, dtype="int16")
         assert rate == 16000   # the audio spans the frames: to the last frame time, at most one frame more
         assert u.alignment.duration * 16000 <= len(wav) <= u.n_frames / u.frame_rate * 16000 + 1
         # Speech where the alignment has phones, near-silence in the leading pause.
@@ -254,7 +254,8 @@ def test_bundled_corpus_is_what_the_regenerate_command_plans(bundled):
             assert u.alignment == fit_to_frames(Alignment(p.labels, ends - np.asarray(p.durations), ends),
                                                u.n_frames, u.frame_rate)
             assert corpus.metadata["utterances"][u.name]["words"] == list(p.words)
-            assert bool(u.audio) == p.audio
+            if p.audio:  # the generator's share; `dam vtl-audio` adds more phrases, never fewer
+                assert u.audio
 
 
 def test_bundled_trajectory_resynthesizes_identically(bundled):

@@ -101,3 +101,31 @@ def test_smoothness_cost_by_hand():
     want0 = ((1 - 1) ** 2 + (2 - 0.5) ** 2 + (3 - 0) ** 2) / 4
     want1 = ((1 - 0) ** 2 + (2 - 1) ** 2 + (3 - 0.75) ** 2) / 4
     np.testing.assert_allclose(E, [[want0, want1]])
+
+
+@pytest.mark.parametrize("alpha", [0.5, 0.01, 2.0])
+def test_mode_graph_node_costs_equal_mode_nll_in_every_context(alpha):
+    """The vectorised E_c of ModeGraph against the reference back-off of mode_nll, every (left, right)."""
+    rng = np.random.default_rng(int(alpha * 100))
+    phones = ["a", "b", "c", "d"]
+    n_modes = {"a": 3, "b": 1, "c": 2, "d": 2}
+    labels = [list(rng.choice(phones, size=int(rng.integers(2, 7)))) for _ in range(25)]
+    modes = [[int(rng.integers(n_modes[p])) for p in lab] for lab in labels]
+    stats = context_counts(labels, modes, n_modes)
+    first, phone_modes = 0, {}
+    for p in phones:
+        phone_modes[p] = [first, n_modes[p]]
+        first += n_modes[p]
+    graph = ModeGraph(phone_modes, stats)
+    levels = {"trigram": 0, "bigram": 1, "unigram": 2}
+    for left in phones + [None]:
+        for p in phones:
+            for right in phones + [None]:
+                seq = [q for q in (left, p, right) if q is not None]
+                j = 0 if left is None else 1
+                pid, _, count = graph.layers(seq)
+                nll, level = graph.node_costs(pid, count, alpha)
+                want, lev = mode_nll(stats, p, left or BOUNDARY, right or BOUNDARY, n_modes[p], alpha)
+                np.testing.assert_allclose(nll[j, :n_modes[p]], want, rtol=1e-12)
+                assert np.all(np.isinf(nll[j, n_modes[p]:]))
+                assert level[j] == levels[lev]

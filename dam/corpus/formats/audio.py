@@ -80,8 +80,8 @@ class AudioClip:
 
     Examples
     --------
-    >>> import numpy as np
-    >>> clip = AudioClip(np.zeros(16000), 16000, name="one-second")
+    >>> import numpy as np, dam
+    >>> clip = dam.corpus.AudioClip(np.zeros(16000), 16000, name="one-second")
     >>> clip.duration, clip.n_frames(100.0)
     (1.0, 101)
     """

@@ -34,18 +34,23 @@ dominance parameters (towards the starting values) fixes that gauge, so the
 geometric mean of the fitted ``alpha`` is 1, and keeps phones seen only once
 identifiable. Synthesis is numpy only.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-from dam import Interval, StateArray, Synthesizer, TupleOf
-from dam import Alignment, Corpus
-from dam import progress
+from dam import Alignment, Corpus, Interval, StateArray, Synthesizer, TupleOf, progress
 
 from .reference import PhoneMean
 
-__all__ = ["CohenMassaro", "dominance", "cohen_massaro_trajectory", "residuals_and_jacobian",
-           "normal_equations", "levenberg_marquardt"]
+__all__ = [
+    "CohenMassaro",
+    "dominance",
+    "cohen_massaro_trajectory",
+    "residuals_and_jacobian",
+    "normal_equations",
+    "levenberg_marquardt",
+]
 
 # Fit and synthesis see an utterance in blocks of this many frames, each with the
 # segments that overlap it and NEIGHBOURS more on either side: a (frames x segments)
@@ -88,8 +93,16 @@ class _Design:
 
     __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone", "present", "onehot")
 
-    def __init__(self, alignment: Alignment, phone_rows: np.ndarray, frame_rate: float, n_frames: int,
-                 stride: int = 1, start: int = 0, jacobian: bool = True):
+    def __init__(
+        self,
+        alignment: Alignment,
+        phone_rows: np.ndarray,
+        frame_rate: float,
+        n_frames: int,
+        stride: int = 1,
+        start: int = 0,
+        jacobian: bool = True,
+    ):
         # Neighbouring segments of one phone (a pause cut in two) act as one segment.
         phone_rows = np.asarray(phone_rows)
         first = np.r_[True, phone_rows[1:] != phone_rows[:-1]]
@@ -115,13 +128,16 @@ class _Design:
             self.onehot[np.arange(len(self.phone)), local] = 1.0
 
     @classmethod
-    def blocks(cls, alignment: Alignment, phone_rows, frame_rate: float, n_frames: int, stride: int = 1,
-               jacobian: bool = True) -> list:
+    def blocks(
+        cls, alignment: Alignment, phone_rows, frame_rate: float, n_frames: int, stride: int = 1, jacobian: bool = True
+    ) -> list:
         """The designs of an utterance's frames ``0, stride, ...`` in blocks of about
         :data:`BLOCK_FRAMES` frames (see there); each block's frames are one slice of the output."""
         step = max(BLOCK_FRAMES // stride, 1) * stride
-        return [cls(alignment, phone_rows, frame_rate, min(b + step, n_frames), stride, b, jacobian)
-                for b in range(0, n_frames, step)]
+        return [
+            cls(alignment, phone_rows, frame_rate, min(b + step, n_frames), stride, b, jacobian)
+            for b in range(0, n_frames, step)
+        ]
 
 
 def _weights(design: _Design, log_alpha, theta_l, theta_r, c):
@@ -165,11 +181,15 @@ def _utterance_terms(params, d: _Design, y: np.ndarray, n_phones: int):
     onehot = d.onehot
     # dF/dphi = sum_s w_s dlogD_s/dphi (T_s - F) for a dominance parameter phi.
     wdev = w * (Tseg[None, :] - F[:, None])
-    J = np.hstack([w @ onehot,                                          # dF/dT_p
-                   wdev @ onehot,                                       # dlogD/dlog alpha = 1
-                   (wdev * -np.where(d.before, tpow, 0.0)) @ onehot,    # left rate, before the centre
-                   (wdev * -np.where(d.before, 0.0, tpow)) @ onehot,    # right rate, after it
-                   (wdev * -(tpow * c[d.phone] * d.log_abs_tau)) @ onehot])  # d|tau|^c/dlog c
+    J = np.hstack(
+        [
+            w @ onehot,  # dF/dT_p
+            wdev @ onehot,  # dlogD/dlog alpha = 1
+            (wdev * -np.where(d.before, tpow, 0.0)) @ onehot,  # left rate, before the centre
+            (wdev * -np.where(d.before, 0.0, tpow)) @ onehot,  # right rate, after it
+            (wdev * -(tpow * c[d.phone] * d.log_abs_tau)) @ onehot,
+        ]
+    )  # d|tau|^c/dlog c
     cols = (np.arange(len(BLOCKS))[:, None] * n_phones + d.present[None, :]).ravel()
     return F - y, J, cols
 
@@ -219,8 +239,9 @@ def normal_equations(x: np.ndarray, designs: list, targets: list, n_phones: int)
     return cost, g, H
 
 
-def levenberg_marquardt(normal_eq, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray, *,
-                        max_nfev: int = 200, tol: float = 1e-4):
+def levenberg_marquardt(
+    normal_eq, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray, *, max_nfev: int = 200, tol: float = 1e-4
+):
     """Minimise a sum of squares from its normal equations, within box bounds.
 
     Steps solve ``(H + mu diag(H)) step = -g`` (Marquardt's scaling) over the
@@ -263,8 +284,7 @@ def levenberg_marquardt(normal_eq, x0: np.ndarray, lower: np.ndarray, upper: np.
         new = normal_eq(x_new)
         nfev += 1
         if new[0] < cost:
-            done = (cost - new[0] <= tol * cost
-                    or np.linalg.norm(x_new - x) <= tol * (np.linalg.norm(x) + tol))
+            done = cost - new[0] <= tol * cost or np.linalg.norm(x_new - x) <= tol * (np.linalg.norm(x) + tol)
             x, (cost, g, H) = x_new, new
             mu = max(mu / 10.0, 1e-12)
             if done:
@@ -321,12 +341,21 @@ class CohenMassaro(Synthesizer):
         "cost_": StateArray("float", ("n_channels",), low=0),
         "n_fev_": StateArray("int", ("n_channels",), low=0),
         "target_": StateArray("float", ("n_phones", "n_channels")),
-        **dict.fromkeys(["alpha_", "theta_left_", "theta_right_", "c_"],
-                        StateArray("float", ("n_phones", "n_channels"), low=0)),
+        **dict.fromkeys(
+            ["alpha_", "theta_left_", "theta_right_", "c_"], StateArray("float", ("n_phones", "n_channels"), low=0)
+        ),
     }
 
-    def __init__(self, *, ridge: float = 1e-4, max_nfev: int = 200, tol: float = 1e-4,
-                 c_bounds: tuple = (0.25, 4.0), fit_rate: float | None = 100.0, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        ridge: float = 1e-4,
+        max_nfev: int = 200,
+        tol: float = 1e-4,
+        c_bounds: tuple = (0.25, 4.0),
+        fit_rate: float | None = 100.0,
+        unknown_phone: str = "error",
+    ):
         self.ridge = ridge
         self.max_nfev = max_nfev
         self.tol = tol
@@ -345,8 +374,12 @@ class CohenMassaro(Synthesizer):
         """One list of block designs per utterance (see :data:`BLOCK_FRAMES`)."""
         index = {p: i for i, p in enumerate(self.phone_counts_)}
         stride = self._stride(corpus.frame_rate)
-        return [_Design.blocks(u.alignment, np.array([index[lab] for lab in u.alignment.labels]), u.frame_rate,
-                               u.n_frames, stride) for u in corpus]
+        return [
+            _Design.blocks(
+                u.alignment, np.array([index[lab] for lab in u.alignment.labels]), u.frame_rate, u.n_frames, stride
+            )
+            for u in corpus
+        ]
 
     def _fit(self, corpus: Corpus) -> None:
         P, C = len(self.phone_counts_), corpus.n_channels
@@ -359,8 +392,8 @@ class CohenMassaro(Synthesizer):
         x0_dom = np.concatenate([np.zeros(P), np.full(P, -np.log(dur)), np.full(P, -np.log(dur)), np.zeros(P)])
         lo = np.concatenate([np.full(P, -np.inf), np.full(P, -20.0), np.full(3 * P, -np.inf)])
         hi = np.concatenate([np.full(P, np.inf), np.full(P, 20.0), np.full(3 * P, np.inf)])
-        lo[4 * P:], hi[4 * P:] = np.log(self.c_bounds[0]), np.log(self.c_bounds[1])
-        lo[2 * P:4 * P], hi[2 * P:4 * P] = np.log(1e-3), np.log(1e6)
+        lo[4 * P :], hi[4 * P :] = np.log(self.c_bounds[0]), np.log(self.c_bounds[1])
+        lo[2 * P : 4 * P], hi[2 * P : 4 * P] = np.log(1e-3), np.log(1e6)
         means = PhoneMean().fit(corpus).table_  # rows in the order of phone_counts_, as ours
         out = {k: np.zeros((P, C)) for k in ("target", "alpha", "theta_left", "theta_right", "c")}
         self.cost_ = np.zeros(C)
@@ -376,19 +409,19 @@ class CohenMassaro(Synthesizer):
 
             dom = np.arange(P, 5 * P)
 
-            def penalised(x, ys=ys, x0=x0):
+            def penalised(x, ys=ys, x0=x0, dom=dom):
                 cost, g, H = normal_equations(x, designs, ys, P)
                 dev = x[dom] - x0[dom]
-                g[dom] += lam ** 2 * dev
-                H[dom, dom] += lam ** 2
-                return cost + lam ** 2 * float(dev @ dev), g, H
+                g[dom] += lam**2 * dev
+                H[dom, dom] += lam**2
+                return cost + lam**2 * float(dev @ dev), g, H
 
             x, cost, nfev = levenberg_marquardt(penalised, x0, lo, hi, max_nfev=self.max_nfev, tol=self.tol)
             T, la, th_l, th_r, c = _unpack(x, P)
             out["target"][:, ch] = mu + sd * T
             out["alpha"][:, ch] = np.exp(la)
             out["theta_left"][:, ch], out["theta_right"][:, ch], out["c"][:, ch] = th_l, th_r, c
-            self.cost_[ch] = normal_equations(x, designs, ys, P)[0] / n_total * sd ** 2
+            self.cost_[ch] = normal_equations(x, designs, ys, P)[0] / n_total * sd**2
             self.n_fev_[ch] = nfev
         self.target_, self.alpha_ = out["target"], out["alpha"]
         self.theta_left_, self.theta_right_, self.c_ = out["theta_left"], out["theta_right"], out["c"]
@@ -412,4 +445,3 @@ def _split(y: np.ndarray, designs: list) -> list:
     """``y`` (one utterance's fitted frames) cut into the frames of each block design."""
     cuts = np.cumsum([len(d.tau) for d in designs])[:-1]
     return np.split(y, cuts)
-

@@ -18,14 +18,20 @@ The fitted tree is stored as arrays (children, feature, threshold, value) and
 predicted by walking them in numpy: a saved model needs neither
 scikit-learn nor pickle.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-from dam import Interval, Options, StateNames, Synthesizer
-from dam import Alignment, Corpus
-from dam.corpus import (fit_transition_clusters, overlap_average, phone_vocabulary, window_dilation, window_features,
-                          window_targets)
+from dam import Alignment, Corpus, Interval, Options, StateNames, Synthesizer
+from dam.corpus import (
+    fit_transition_clusters,
+    overlap_average,
+    phone_vocabulary,
+    window_dilation,
+    window_features,
+    window_targets,
+)
 
 __all__ = ["DecisionTree", "tree_to_arrays", "predict_tree_arrays"]
 
@@ -41,11 +47,13 @@ def tree_to_arrays(tree) -> dict[str, np.ndarray]:
     ``feature`` (int), ``threshold`` (float), all of shape (n_nodes,), and
     ``value`` (float, shape (n_nodes, n_outputs)).
     """
-    return {"children_left": np.asarray(tree.children_left, dtype=np.int64),
-            "children_right": np.asarray(tree.children_right, dtype=np.int64),
-            "feature": np.asarray(tree.feature, dtype=np.int64),
-            "threshold": np.asarray(tree.threshold, dtype=np.float64),
-            "value": np.asarray(tree.value, dtype=np.float64).reshape(tree.node_count, -1)}
+    return {
+        "children_left": np.asarray(tree.children_left, dtype=np.int64),
+        "children_right": np.asarray(tree.children_right, dtype=np.int64),
+        "feature": np.asarray(tree.feature, dtype=np.int64),
+        "threshold": np.asarray(tree.threshold, dtype=np.float64),
+        "value": np.asarray(tree.value, dtype=np.float64).reshape(tree.node_count, -1),
+    }
 
 
 def predict_tree_arrays(arrays: dict, X: np.ndarray) -> np.ndarray:
@@ -133,9 +141,20 @@ class DecisionTree(Synthesizer):
         "n_leaves_": Interval(int, 1, None),
     }
 
-    def __init__(self, *, kx: int = 11, ky: int = 5, features: str = "raw", transitions: str = "data",
-                 window_rate: float | None = 30.0, example_stride: int | None = None, min_samples_leaf: int = 10,
-                 max_depth: int | None = None, random_state: int = 0, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        kx: int = 11,
+        ky: int = 5,
+        features: str = "raw",
+        transitions: str = "data",
+        window_rate: float | None = 30.0,
+        example_stride: int | None = None,
+        min_samples_leaf: int = 10,
+        max_depth: int | None = None,
+        random_state: int = 0,
+        unknown_phone: str = "error",
+    ):
         self.kx = kx
         self.ky = ky
         self.features = features
@@ -149,32 +168,45 @@ class DecisionTree(Synthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"max_depth": 12}, {"features": "linguistic", "kx": 7, "ky": 3, "max_depth": 8,
-                                    "unknown_phone": "fallback"}]
+        return [
+            {"max_depth": 12},
+            {"features": "linguistic", "kx": 7, "ky": 3, "max_depth": 8, "unknown_phone": "fallback"},
+        ]
 
     def _features(self, alignment: Alignment, n_frames: int) -> np.ndarray:
-        return window_features(alignment, self.frame_rate_, n_frames, self.vocabulary_, kx=self.kx,
-                               features=self.features, transition_clusters=self.transition_clusters_,
-                               dilation=self.dilation_)
+        return window_features(
+            alignment,
+            self.frame_rate_,
+            n_frames,
+            self.vocabulary_,
+            kx=self.kx,
+            features=self.features,
+            transition_clusters=self.transition_clusters_,
+            dilation=self.dilation_,
+        )
 
     def _fit(self, corpus: Corpus) -> None:
         from sklearn.tree import DecisionTreeRegressor
+
         self.vocabulary_ = phone_vocabulary(corpus, silence=corpus.alignments[0].silence)
         self.dilation_ = window_dilation(corpus.frame_rate, self.window_rate)
         self.transition_clusters_ = None
         if self.features == "linguistic" and self.transitions == "data":
-            self.transition_clusters_ = fit_transition_clusters(corpus, self.vocabulary_,
-                                                                random_state=self.random_state)
-        stride = (int(np.ceil(corpus.frame_rate / 100.0 - 1e-9)) if self.example_stride is None
-                  else int(self.example_stride))
+            self.transition_clusters_ = fit_transition_clusters(
+                corpus, self.vocabulary_, random_state=self.random_state
+            )
+        stride = (
+            int(np.ceil(corpus.frame_rate / 100.0 - 1e-9)) if self.example_stride is None else int(self.example_stride)
+        )
         X, Y = [], []
         for u in corpus:
             # Every stride-th frame, the phase varying over utterances.
             take = np.arange(len(X) % stride, u.n_frames, stride)
             X.append(self._features(u.alignment, u.n_frames)[take])
             Y.append(window_targets(u.trajectory, ky=self.ky, dilation=self.dilation_)[take])
-        est = DecisionTreeRegressor(min_samples_leaf=self.min_samples_leaf, max_depth=self.max_depth,
-                                    random_state=self.random_state)
+        est = DecisionTreeRegressor(
+            min_samples_leaf=self.min_samples_leaf, max_depth=self.max_depth, random_state=self.random_state
+        )
         est.fit(np.concatenate(X), np.concatenate(Y))
         self._sklearn_tree = est  # kept for inspection and tests; never saved
         self.tree_ = tree_to_arrays(est.tree_)
@@ -183,7 +215,8 @@ class DecisionTree(Synthesizer):
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         labels = self._known_labels(alignment, self.unknown_phone)
         if tuple(labels) != alignment.labels:
-            alignment = Alignment(labels, alignment.starts, alignment.ends, source=alignment.source,
-                                  silence=alignment.silence)
+            alignment = Alignment(
+                labels, alignment.starts, alignment.ends, source=alignment.source, silence=alignment.silence
+            )
         windows = predict_tree_arrays(self.tree_, self._features(alignment, n_frames))
         return overlap_average(windows, self.ky, len(self.channels_), dilation=self.dilation_)

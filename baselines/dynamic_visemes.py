@@ -60,6 +60,7 @@ minutes); the smoothing of the phone-string probabilities; the weights of
 the cost terms; unit instances chosen by phone-string match; per-phone
 time warping; and the cross-fade length.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -69,8 +70,9 @@ from dam import Alignment, Corpus, Interval, StateArray, StateNames, Synthesizer
 __all__ = ["DynamicVisemes", "gesture_boundaries", "gesture_units", "time_normalise", "cluster_units"]
 
 
-def gesture_boundaries(trajectory, frame_rate: float, *, smoothing: float = 0.03,
-                       min_gesture: float = 0.06) -> np.ndarray:
+def gesture_boundaries(
+    trajectory, frame_rate: float, *, smoothing: float = 0.03, min_gesture: float = 0.06
+) -> np.ndarray:
     """Frames where the articulators pause: local minima of the smoothed speed.
 
     Parameters
@@ -177,6 +179,7 @@ def cluster_units(shapes, n_clusters: int, random_state: int = 0) -> tuple[np.nd
     centroids : ndarray, shape (n_clusters, n_points, n_channels)
     """
     from sklearn.cluster import KMeans
+
     shapes = np.asarray(shapes, dtype=float)
     X = shapes.reshape(len(shapes), -1)
     k = int(min(n_clusters, len(np.unique(X.round(12), axis=0))))
@@ -256,10 +259,13 @@ class DynamicVisemes(Synthesizer):
     name = "dynamic-visemes"
     _tags = {"deterministic": True, "numpy_runtime": True}
     _parameter_constraints = {
-        **dict.fromkeys(["n_clusters", "max_phones", "n_shape_points", "n_points"],
-                        [Interval(int, 1, None, closed="left")]),
-        **dict.fromkeys(["smoothing", "min_gesture", "duration_weight", "join_weight", "crossfade"],
-                        [Interval(float, 0, None, closed="left")]),
+        **dict.fromkeys(
+            ["n_clusters", "max_phones", "n_shape_points", "n_points"], [Interval(int, 1, None, closed="left")]
+        ),
+        **dict.fromkeys(
+            ["smoothing", "min_gesture", "duration_weight", "join_weight", "crossfade"],
+            [Interval(float, 0, None, closed="left")],
+        ),
     }
     _state_schema = {  # checked at save and load (dam.modelfile.check_state)
         "vocabulary_": StateNames("n_vocabulary"),
@@ -279,10 +285,21 @@ class DynamicVisemes(Synthesizer):
         "log_rate_std_": StateArray("float", ("n_clusters",), low=0),
     }
 
-    def __init__(self, *, n_clusters: int = 50, max_phones: int = 4, smoothing: float = 0.03,
-                 min_gesture: float = 0.06, n_shape_points: int = 10, n_points: int = 8,
-                 duration_weight: float = 0.1, join_weight: float = 0.1, crossfade: float = 0.12,
-                 random_state: int = 0, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        n_clusters: int = 50,
+        max_phones: int = 4,
+        smoothing: float = 0.03,
+        min_gesture: float = 0.06,
+        n_shape_points: int = 10,
+        n_points: int = 8,
+        duration_weight: float = 0.1,
+        join_weight: float = 0.1,
+        crossfade: float = 0.12,
+        random_state: int = 0,
+        unknown_phone: str = "error",
+    ):
         self.n_clusters = n_clusters
         self.max_phones = max_phones
         self.smoothing = smoothing
@@ -297,13 +314,13 @@ class DynamicVisemes(Synthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"n_clusters": 12, "max_phones": 3}, {"n_clusters": 10, "max_phones": 2,
-                                                      "unknown_phone": "fallback"}]
+        return [{"n_clusters": 12, "max_phones": 3}, {"n_clusters": 10, "max_phones": 2, "unknown_phone": "fallback"}]
 
     # -- fitting ---------------------------------------------------------------
     def _fit(self, corpus: Corpus) -> None:
         from baselines.hmm import merge_silences
         from dam.corpus import phone_vocabulary
+
         L, P = int(self.max_phones), int(self.n_points)
         self.vocabulary_ = phone_vocabulary(corpus, silence=corpus.alignments[0].silence)
         index = {p: i for i, p in enumerate(self.vocabulary_)}
@@ -322,8 +339,9 @@ class DynamicVisemes(Synthesizer):
                 t0, t1 = a.starts[i], a.ends[j - 1]
                 shapes.append(time_normalise(z, fr, t0, t1, int(self.n_shape_points)))
                 phones.append([index[lab] for lab in a.labels[i:j]] + [-1] * (L - (j - i)))
-                instances.append(np.concatenate([time_normalise(z, fr, a.starts[k], a.ends[k], P)
-                                                 for k in range(i, j)]))
+                instances.append(
+                    np.concatenate([time_normalise(z, fr, a.starts[k], a.ends[k], P) for k in range(i, j)])
+                )
                 rates.append(np.log((t1 - t0) / (j - i)))
                 lengths.append(j - i)
         shapes = np.stack(shapes)
@@ -381,8 +399,10 @@ class DynamicVisemes(Synthesizer):
         """Row of every seen string, and log P(DV | phone) smoothed by half a count per DV."""
         pc = self.phone_counts_dv_
         K = pc.shape[1]
-        return ({k: r for r, k in enumerate(self.string_keys_)},
-                np.log((pc + 0.5) / (pc.sum(axis=1, keepdims=True) + 0.5 * K)))
+        return (
+            {k: r for r, k in enumerate(self.string_keys_)},
+            np.log((pc + 0.5) / (pc.sum(axis=1, keepdims=True) + 0.5 * K)),
+        )
 
     def _choose(self, idx: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> list[tuple[int, int, int]]:
         """Dynamic programme: the best ``(i, j, dv)`` strings covering the phones."""
@@ -424,7 +444,7 @@ class DynamicVisemes(Synthesizer):
         members = np.flatnonzero(self.unit_cluster_ == k)
         rows = self.unit_phones_[members]
         target = np.full(rows.shape[1], -2)
-        target[:len(idx)] = idx
+        target[: len(idx)] = idx
         same_len = (rows >= 0).sum(axis=1) == len(idx)
         in_place = (rows == target).sum(axis=1)
         exact = same_len & (in_place == len(idx))
@@ -434,10 +454,12 @@ class DynamicVisemes(Synthesizer):
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         from baselines.hmm import merge_silences
+
         labels = self._known_labels(alignment, self.unknown_phone)
         if tuple(labels) != alignment.labels:
-            alignment = Alignment(labels, alignment.starts, alignment.ends, source=alignment.source,
-                                  silence=alignment.silence)
+            alignment = Alignment(
+                labels, alignment.starts, alignment.ends, source=alignment.source, silence=alignment.silence
+            )
         a = merge_silences(alignment)
         index = {p: i for i, p in enumerate(self.vocabulary_)}
         idx = np.array([index[lab] for lab in a.labels], dtype=np.int64)
@@ -448,11 +470,12 @@ class DynamicVisemes(Synthesizer):
         weight = np.zeros(n_frames)
         for i, j, k in self._choose(idx, a.starts, a.ends):
             u = self._instance(idx[i:j], k)
-            inst = self.instances_[self.unit_offset_[u]:self.unit_offset_[u + 1]]
+            inst = self.instances_[self.unit_offset_[u] : self.unit_offset_[u + 1]]
             n_inst = len(inst) // P
             if n_inst == j - i:  # per-phone warp onto the new phone boundaries
-                knots = np.concatenate([a.starts[m] + (np.arange(P) + 0.5) / P * (a.ends[m] - a.starts[m])
-                                        for m in range(i, j)])
+                knots = np.concatenate(
+                    [a.starts[m] + (np.arange(P) + 0.5) / P * (a.ends[m] - a.starts[m]) for m in range(i, j)]
+                )
             else:  # whole-unit linear warp
                 knots = a.starts[i] + (np.arange(len(inst)) + 0.5) / len(inst) * (a.ends[j - 1] - a.starts[i])
             t0, t1 = a.starts[i], a.ends[j - 1]

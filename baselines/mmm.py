@@ -28,18 +28,23 @@ Fitting uses ``scipy.linalg.solveh_banded``; synthesis uses it too when
 scipy is installed and otherwise :func:`banded_cholesky_solve`, a banded
 Cholesky in numpy alone (same result, slower).
 """
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-from dam import Interval, StateArray, Synthesizer, TupleOf
-from dam import progress
-from dam import Alignment, Corpus
+from dam import Alignment, Corpus, Interval, StateArray, Synthesizer, TupleOf, progress
 
-__all__ = ["MMM", "difference_gram_banded", "banded_cholesky_solve", "solve_banded_spd", "mmm_system",
-           "synthesis_loss_and_gradient"]
+__all__ = [
+    "MMM",
+    "difference_gram_banded",
+    "banded_cholesky_solve",
+    "solve_banded_spd",
+    "mmm_system",
+    "synthesis_loss_and_gradient",
+]
 
 
 def difference_gram_banded(n: int, order: int) -> np.ndarray:
@@ -59,7 +64,7 @@ def difference_gram_banded(n: int, order: int) -> np.ndarray:
     rows = max(n - order, 0)  # row r of W touches frames r .. r + order
     for a in range(order + 1):
         for b in range(a, order + 1):
-            ab[b - a, a:a + rows] += stencil[a] * stencil[b]
+            ab[b - a, a : a + rows] += stencil[a] * stencil[b]
     return ab
 
 
@@ -178,6 +183,7 @@ def synthesis_loss_and_gradient(mu, log_var, utterances, lam: float):
     ``dL/dA = v (mu_f - y*)``; ``dA/dlog var = -A``.
     """
     from scipy.linalg import solveh_banded
+
     loss = 0.0
     g_mu = np.zeros_like(mu)
     g_lv = np.zeros_like(log_var)
@@ -238,8 +244,7 @@ class MMM(Synthesizer):
     name = "mmm"
     _tags = {"deterministic": True, "numpy_runtime": True}
     _parameter_constraints = {
-        "smoothness": [TupleOf(Interval(float, 0, None, closed="neither")),
-                       Interval(float, 0, None, closed="neither")],
+        "smoothness": [TupleOf(Interval(float, 0, None, closed="neither")), Interval(float, 0, None, closed="neither")],
         "order": [Interval(int, 1, 2, closed="both")],
         "duration_weighting": ["boolean"],
         "max_iter": [Interval(int, 0, None, closed="left")],
@@ -255,9 +260,18 @@ class MMM(Synthesizer):
         "channel_scale_": StateArray("float", ("n_channels",), low=0),
     }
 
-    def __init__(self, *, smoothness: tuple = (1.0, 10.0, 100.0, 1000.0), order: int = 2,
-                 duration_weighting: bool = True, max_iter: int = 100, validation_fraction: float = 0.2,
-                 var_floor: float = 1e-4, random_state: int = 0, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        smoothness: tuple = (1.0, 10.0, 100.0, 1000.0),
+        order: int = 2,
+        duration_weighting: bool = True,
+        max_iter: int = 100,
+        validation_fraction: float = 0.2,
+        var_floor: float = 1e-4,
+        random_state: int = 0,
+        unknown_phone: str = "error",
+    ):
         self.smoothness = smoothness
         self.order = order
         self.duration_weighting = duration_weighting
@@ -269,8 +283,10 @@ class MMM(Synthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"smoothness": (1.0, 100.0), "max_iter": 20},
-                {"smoothness": (10.0,), "order": 1, "max_iter": 10, "unknown_phone": "fallback"}]
+        return [
+            {"smoothness": (1.0, 100.0), "max_iter": 20},
+            {"smoothness": (10.0,), "order": 1, "max_iter": 10, "unknown_phone": "fallback"},
+        ]
 
     # -- fitting -----------------------------------------------------------
     def _prepare(self, corpus: Corpus, index: dict, loc, scale) -> list:
@@ -285,6 +301,7 @@ class MMM(Synthesizer):
     def _train(self, data: list, mu0: np.ndarray, lv0: np.ndarray, lam: float):
         """Train means and log variances of every channel for one ``lambda``; returns (mu, lv, mse)."""
         from scipy.optimize import minimize
+
         P, C = mu0.shape
         lo = np.log(self.var_floor)
         mu, lv, mse = mu0.copy(), lv0.copy(), np.zeros(C)
@@ -298,19 +315,27 @@ class MMM(Synthesizer):
 
             x0 = np.concatenate([mu0[:, ch], np.maximum(lv0[:, ch], lo)])
             bounds = [(None, None)] * P + [(lo, None)] * P
-            res = minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds,
-                           options={"maxiter": self.max_iter})
+            res = minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": self.max_iter})
             mu[:, ch], lv[:, ch], mse[ch] = res.x[:P], res.x[P:], res.fun
         return mu, lv, mse
 
     def _synthesize_std(self, data: list, mu: np.ndarray, lv: np.ndarray, lam: float) -> list:
         from scipy.linalg import solveh_banded
+
         out = []
         for rows, dw, gab, _ in data:
             A = dw[:, None] * np.exp(-lv[rows])
-            out.append(np.stack([solveh_banded(mmm_system(A[:, c], gab, lam), A[:, c] * mu[rows, c],
-                                               lower=True, check_finite=False)
-                                 for c in range(mu.shape[1])], axis=1))
+            out.append(
+                np.stack(
+                    [
+                        solveh_banded(
+                            mmm_system(A[:, c], gab, lam), A[:, c] * mu[rows, c], lower=True, check_finite=False
+                        )
+                        for c in range(mu.shape[1])
+                    ],
+                    axis=1,
+                )
+            )
         return out
 
     def _fit(self, corpus: Corpus) -> None:
@@ -334,7 +359,7 @@ class MMM(Synthesizer):
                 mu, lv, _ = self._train(_concatenated(part), mu0, lv0, lam)
                 held_out = _concatenated([data[i] for i in val])
                 err = np.concatenate([p - d[3] for p, d in zip(self._synthesize_std(held_out, mu, lv, lam), held_out)])
-                self.validation_rmse_[lam] = float(np.sqrt(np.mean(err ** 2)))
+                self.validation_rmse_[lam] = float(np.sqrt(np.mean(err**2)))
             lam = min(cands, key=lambda v: (self.validation_rmse_[v], v))
         else:
             lam = cands[0]
@@ -342,8 +367,8 @@ class MMM(Synthesizer):
         mu, lv, mse = self._train(_concatenated(data), mu0, lv0, lam)
         self.smoothness_ = lam
         self.mean_ = loc + scale * mu
-        self.var_ = np.exp(lv) * scale ** 2
-        self.loss_ = mse * scale ** 2
+        self.var_ = np.exp(lv) * scale**2
+        self.loss_ = mse * scale**2
         self.channel_scale_ = scale
 
     # -- synthesis (numpy only) ----------------------------------------------
@@ -354,7 +379,7 @@ class MMM(Synthesizer):
         rows = np.array([index[lab] for lab in labels])[seg]
         A = (dw[:, None] / self.var_[rows]).T  # (n_channels, n_frames)
         # lambda was chosen on standardised channels: in channel units it is lambda / scale^2.
-        lam = (self.smoothness_ / self.channel_scale_ ** 2)[:, None, None]
+        lam = (self.smoothness_ / self.channel_scale_**2)[:, None, None]
         M = mmm_system(A, difference_gram_banded(n_frames, self.order), lam)
         return solve_banded_spd(M, A * self.mean_[rows].T).T
 

@@ -8,12 +8,12 @@
 
 Both synthesize with numpy alone.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-from dam import StateArray, Synthesizer
-from dam import Alignment, Corpus
+from dam import Alignment, Corpus, StateArray, Synthesizer
 
 __all__ = ["PhoneMean", "TargetInterpolation"]
 
@@ -98,8 +98,9 @@ class TargetInterpolation(_PerPhoneTable):
             a = u.alignment
             mid = 0.5 * (a.starts + a.ends) * u.frame_rate
             # Linear interpolation of the trajectory at the exact midpoint time.
-            vals = np.stack([np.interp(mid, np.arange(u.n_frames), u.trajectory[:, c])
-                             for c in range(u.n_channels)], axis=1)
+            vals = np.stack(
+                [np.interp(mid, np.arange(u.n_frames), u.trajectory[:, c]) for c in range(u.n_channels)], axis=1
+            )
             rows = np.array([index[lab] for lab in a.labels])
             np.add.at(sums, rows, vals)
             np.add.at(counts, rows, 1.0)
@@ -127,5 +128,9 @@ def hermite_catmull_rom(kt: np.ndarray, ky: np.ndarray, t: np.ndarray) -> np.nda
     h = (kt[k + 1] - kt[k])[:, None]
     s = (tc[:, None] - kt[k][:, None]) / h
     s2, s3 = s * s, s * s * s
-    return ((2 * s3 - 3 * s2 + 1) * ky[k] + (s3 - 2 * s2 + s) * h * m[k]
-            + (-2 * s3 + 3 * s2) * ky[k + 1] + (s3 - s2) * h * m[k + 1])
+    return (
+        (2 * s3 - 3 * s2 + 1) * ky[k]
+        + (s3 - 2 * s2 + s) * h * m[k]
+        + (-2 * s3 + 3 * s2) * ky[k + 1]
+        + (s3 - s2) * h * m[k + 1]
+    )

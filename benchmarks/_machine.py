@@ -1,4 +1,5 @@
 """Shared by the benchmarks: a description of the machine and a median timer."""
+
 from __future__ import annotations
 
 import os
@@ -19,9 +20,15 @@ def machine() -> dict:
     except OSError:
         pass
     import numpy as np
-    return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "numpy": np.__version__, "platform": platform.platform(),
-            "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
+
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "platform": platform.platform(),
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+    }
 
 
 def median_time(fn, repeat: int = 5, number: int = 1) -> float:

@@ -22,6 +22,7 @@ says so.
 
     python benchmarks/bench_audio_models.py [--epochs 15] [--channels JA,LD,LP,TTY,TBY,TCY]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -58,8 +59,11 @@ def model_rows(epochs: int) -> list:
         ("gru (phones)", "gru", {"n_layers": 2, "hidden_size": 32, **nn}),
         ("causal-mlp (mfcc)", "causal-mlp", {"encoder": "mfcc", "hidden_layer_sizes": (128,), **nn}),
         ("gru (mfcc)", "gru", {"encoder": "mfcc", "n_layers": 2, "hidden_size": 32, **nn}),
-        ("transformer (mfcc)", "transformer", {"encoder": "mfcc", "n_layers": 2, "d_model": 32, "d_ff": 64,
-                                               "n_heads": 4, **nn}),
+        (
+            "transformer (mfcc)",
+            "transformer",
+            {"encoder": "mfcc", "n_layers": 2, "d_model": 32, "d_ff": 64, "n_heads": 4, **nn},
+        ),
         ("visemenet", "visemenet", {"hidden_size": 32, "n_layers": 2, "fc_size": 32, "pretrain_epochs": 5, **nn}),
     ]
 
@@ -67,6 +71,7 @@ def model_rows(epochs: int) -> list:
 def inference_ms(train, test) -> dict:
     """ms per second of audio: untrained networks in the paper's configurations (weights do not change the cost)."""
     from baselines.nn.acoustic import mfcc
+
     small = train.subset(range(min(4, len(train))))
     configs = {
         "MLP 15:5": ("causal-mlp", {"kx": 15, "ky": 5, "hidden_layer_sizes": (512,)}),
@@ -83,9 +88,13 @@ def inference_ms(train, test) -> dict:
             t0 = time.perf_counter()
             m.predict(list(test))
             times.append(time.perf_counter() - t0)
-        out[label] = {"ms_per_audio_second": 1000 * float(np.median(times)) / seconds,
-                      "n_parameters": m.n_parameters_, "paper_ms": PAPER_MS[label]}
+        out[label] = {
+            "ms_per_audio_second": 1000 * float(np.median(times)) / seconds,
+            "n_parameters": m.n_parameters_,
+            "paper_ms": PAPER_MS[label],
+        }
     from dam.speech import load_audio
+
     x = np.concatenate([load_audio(u.audio)[0] for u in test])
     t0 = time.perf_counter()
     mfcc(x, 16000, frame_rate=100.0)
@@ -106,25 +115,49 @@ def main(argv=None) -> int:
     train, test = (with_audio(c).select_channels(channels) for c in (full_train, full_test))
     t0 = time.time()
     res = compare(model_rows(args.epochs), train, test, n_jobs=1)
-    rows = [{k: r[k] for k in ("model", "rmse", "rmse_ci_low", "rmse_ci_high", "pearson_r", "fit_seconds",
-                               "frames_per_second", "status", "reason")} for r in res.summary]
+    rows = [
+        {
+            k: r[k]
+            for k in (
+                "model",
+                "rmse",
+                "rmse_ci_low",
+                "rmse_ci_high",
+                "pearson_r",
+                "fit_seconds",
+                "frames_per_second",
+                "status",
+                "reason",
+            )
+        }
+        for r in res.summary
+    ]
     for r in rows:
         r["reads"] = "audio" if "(mfcc)" in r["model"] or r["model"] == "visemenet" else "phones"
     vis = dam.registry.make("visemenet", **model_rows(args.epochs)[-1][2]).fit(train)
     scores = vis.activation_scores(test)
     vis_eval = evaluate(vis, test)
     result = {
-        "machine": machine(), "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-        "corpus": {"train": f"{len(train)} of {len(full_train)} vtl train utterances have audio "
-                            f"({sum(u.duration for u in train) / 60:.1f} min)",
-                   "test": f"{len(test)} of {len(full_test)} vtl test utterances have audio "
-                           f"({sum(u.duration for u in test) / 60:.1f} min)",
-                   "channels": channels},
-        "epochs": args.epochs, "rows": rows,
-        "visemenet": {"activation_precision": scores["precision"], "activation_recall": scores["recall"],
-                      "phone_group_accuracy": scores["phone_group_accuracy"], "rmse": vis_eval.rmse,
-                      "thresholds": dict(zip(vis.channels_, map(float, vis.thresholds_)))},
-        "inference": inference_ms(train, test), "seconds": time.time() - t0,
+        "machine": machine(),
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "corpus": {
+            "train": f"{len(train)} of {len(full_train)} vtl train utterances have audio "
+            f"({sum(u.duration for u in train) / 60:.1f} min)",
+            "test": f"{len(test)} of {len(full_test)} vtl test utterances have audio "
+            f"({sum(u.duration for u in test) / 60:.1f} min)",
+            "channels": channels,
+        },
+        "epochs": args.epochs,
+        "rows": rows,
+        "visemenet": {
+            "activation_precision": scores["precision"],
+            "activation_recall": scores["recall"],
+            "phone_group_accuracy": scores["phone_group_accuracy"],
+            "rmse": vis_eval.rmse,
+            "thresholds": dict(zip(vis.channels_, map(float, vis.thresholds_))),
+        },
+        "inference": inference_ms(train, test),
+        "seconds": time.time() - t0,
     }
     RESULTS.mkdir(exist_ok=True)
     with atomic_write(RESULTS / "audio_models.json", "w", encoding="utf-8") as fh:
@@ -145,27 +178,40 @@ def markdown(r) -> str:
         if row["status"] != "ok":
             lines.append(f"| {row['model']} | {row['reads']} | {row['status']}: {row['reason']} | | | |")
             continue
-        lines.append(f"| {row['model']} | {row['reads']} | {_f(row['rmse'])} | {_f(row['rmse_ci_low'])}-"
-                     f"{_f(row['rmse_ci_high'])} | {_f(row['pearson_r'], '{:.3f}')} | "
-                     f"{_f(row['fit_seconds'], '{:.1f}')} |")
+        lines.append(
+            f"| {row['model']} | {row['reads']} | {_f(row['rmse'])} | {_f(row['rmse_ci_low'])}-"
+            f"{_f(row['rmse_ci_high'])} | {_f(row['pearson_r'], '{:.3f}')} | "
+            f"{_f(row['fit_seconds'], '{:.1f}')} |"
+        )
     c = r["corpus"]
     v = r["visemenet"]
-    lines += ["", f"Train: {c['train']}; test: {c['test']}; channels {', '.join(c['channels'])} "
-              f"(a subset: CPU is scarce); neural rows trained {r['epochs']} epochs with small networks. "
-              "Every row, phone- or audio-driven, uses the same utterances (those with audio).", "",
-              f"VisemeNet activations (a control is active more than 0.5 std from its rest): precision "
-              f"{_f(v['activation_precision'], '{:.3f}')}, recall {_f(v['activation_recall'], '{:.3f}')}; "
-              f"phone-group accuracy from audio {_f(v['phone_group_accuracy'], '{:.3f}')}.", "",
-              "| inference, ms per second of audio | ours (CPU) | Medina et al. (GPU) | parameters |",
-              "|---|---:|---:|---:|"]
+    lines += [
+        "",
+        f"Train: {c['train']}; test: {c['test']}; channels {', '.join(c['channels'])} "
+        f"(a subset: CPU is scarce); neural rows trained {r['epochs']} epochs with small networks. "
+        "Every row, phone- or audio-driven, uses the same utterances (those with audio).",
+        "",
+        f"VisemeNet activations (a control is active more than 0.5 std from its rest): precision "
+        f"{_f(v['activation_precision'], '{:.3f}')}, recall {_f(v['activation_recall'], '{:.3f}')}; "
+        f"phone-group accuracy from audio {_f(v['phone_group_accuracy'], '{:.3f}')}.",
+        "",
+        "| inference, ms per second of audio | ours (CPU) | Medina et al. (GPU) | parameters |",
+        "|---|---:|---:|---:|",
+    ]
     for label, x in r["inference"].items():
-        lines.append(f"| {label} | {_f(x['ms_per_audio_second'], '{:.2f}')} | "
-                     f"{_f(x.get('paper_ms'), '{:.3f}')} | {x.get('n_parameters', '')} |")
+        lines.append(
+            f"| {label} | {_f(x['ms_per_audio_second'], '{:.2f}')} | "
+            f"{_f(x.get('paper_ms'), '{:.3f}')} | {x.get('n_parameters', '')} |"
+        )
     m = r["machine"]
-    lines += ["", "Decoder rows: MFCC (13 per frame at 100 Hz) precomputed and cached, networks untrained (the "
-              "cost does not depend on the weights), 256 units per GRU layer (the paper's size is not stated; its "
-              "GRU-2L has 3.95e6 parameters, its MLP 15:5 6.62e7). MFCC extraction is numpy on one core. Machine: "
-              f"{m.get('cpu', '')}, {m.get('cores', '')} cores, shared with other jobs; {r['date']}.", ""]
+    lines += [
+        "",
+        "Decoder rows: MFCC (13 per frame at 100 Hz) precomputed and cached, networks untrained (the "
+        "cost does not depend on the weights), 256 units per GRU layer (the paper's size is not stated; its "
+        "GRU-2L has 3.95e6 parameters, its MLP 15:5 6.62e7). MFCC extraction is numpy on one core. Machine: "
+        f"{m.get('cpu', '')}, {m.get('cores', '')} cores, shared with other jobs; {r['date']}.",
+        "",
+    ]
     return "\n".join(lines)
 
 

@@ -10,6 +10,7 @@ without scipy uses).
 
     python benchmarks/bench_baselines.py [--corpus tiny] [--repeat 5]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,8 +27,7 @@ from _machine import machine, median_time  # noqa: E402
 import dam  # noqa: E402
 from baselines import mmm as mmm_module  # noqa: E402
 
-MODELS = [("phone-mean", {}), ("cohen-massaro", {}), ("mmm", {}), ("dtree", {}),
-          ("dtree", {"features": "linguistic"})]
+MODELS = [("phone-mean", {}), ("cohen-massaro", {}), ("mmm", {}), ("dtree", {}), ("dtree", {"features": "linguistic"})]
 
 
 def main(argv=None):
@@ -55,23 +55,46 @@ def main(argv=None):
                 with mock.patch.object(mmm_module, "solve_banded_spd", solver):
                     t = median_time(lambda: model.predict(test.alignments), repeat=args.repeat)
             label = name + ("" if not params else "[" + ",".join(f"{k}={v}" for k, v in params.items()) + "]")
-            rows.append({"model": label + suffix, "fit_seconds": fit_s, "predict_seconds_median": t,
-                         "us_per_phone": 1e6 * t / n_phones, "frames_per_second": n_frames / t})
+            rows.append(
+                {
+                    "model": label + suffix,
+                    "fit_seconds": fit_s,
+                    "predict_seconds_median": t,
+                    "us_per_phone": 1e6 * t / n_phones,
+                    "frames_per_second": n_frames / t,
+                }
+            )
     ref = rows[0]["us_per_phone"]
     for r in rows:
         r["ratio_to_phone_mean"] = r["us_per_phone"] / ref
-    res = {"machine": machine(), "corpus": args.corpus, "train_utterances": len(train),
-           "test_utterances": len(test), "test_phones": n_phones, "test_frames": n_frames, "rows": rows}
+    res = {
+        "machine": machine(),
+        "corpus": args.corpus,
+        "train_utterances": len(train),
+        "test_utterances": len(test),
+        "test_phones": n_phones,
+        "test_frames": n_frames,
+        "rows": rows,
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "baselines.json").write_text(json.dumps(res, indent=2) + "\n")
-    lines = ["| model | fit (s) | synthesis (µs/phone, median) | frames/s | × phone-mean |", "|---|---:|---:|---:|---:|"]
-    lines += [f"| {r['model']} | {r['fit_seconds']:.2f} | {r['us_per_phone']:.1f} | {r['frames_per_second']:.3g} "
-              f"| {r['ratio_to_phone_mean']:.1f} |" for r in rows]
+    lines = [
+        "| model | fit (s) | synthesis (µs/phone, median) | frames/s | × phone-mean |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {r['model']} | {r['fit_seconds']:.2f} | {r['us_per_phone']:.1f} | {r['frames_per_second']:.3g} "
+        f"| {r['ratio_to_phone_mean']:.1f} |"
+        for r in rows
+    ]
     m = res["machine"]
-    lines += ["", f"Corpus {args.corpus}: fit on {len(train)} utterances, synthesis of {len(test)} held-out "
-              f"utterances ({n_phones} phones, {n_frames} frames). Machine: {m['cpu']}, {m['cores']} cores, "
-              f"numpy {m['numpy']}, {m['date']}. The paper's DAM: 0.8 ms per phone."]
+    lines += [
+        "",
+        f"Corpus {args.corpus}: fit on {len(train)} utterances, synthesis of {len(test)} held-out "
+        f"utterances ({n_phones} phones, {n_frames} frames). Machine: {m['cpu']}, {m['cores']} cores, "
+        f"numpy {m['numpy']}, {m['date']}. The paper's DAM: 0.8 ms per phone.",
+    ]
     (out / "baselines.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

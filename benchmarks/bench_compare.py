@@ -9,6 +9,7 @@ prints). ``benchmarks/update_readme.py`` fills the README's tables from the JSON
     python benchmarks/bench_compare.py taylor        # Taylor et al. (2017)'s rows on the jaw and lips (long)
     python benchmarks/bench_compare.py demo --jobs 2
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,13 +31,22 @@ from dam.evaluation.compare import DEMO_MODELS, compare, demo_plan  # noqa: E402
 
 #: Taylor et al. (2017)'s comparison (issue 16): their network at both window spans, their four baselines,
 #: the DAM and the floor; on the jaw and lip channels (their AAM described the lower face).
-TAYLOR_MODELS = ["dam", "hmm", "dynamic-visemes", "dtree", "sliding-dnn",
-                 ("sliding-dnn-30hz", "sliding-dnn", {"window_rate": 30.0}), "lstm", "phone-mean"]
+TAYLOR_MODELS = [
+    "dam",
+    "hmm",
+    "dynamic-visemes",
+    "dtree",
+    "sliding-dnn",
+    ("sliding-dnn-30hz", "sliding-dnn", {"window_rate": 30.0}),
+    "lstm",
+    "phone-mean",
+]
 
 
 def run(name: str, n_jobs: int) -> dict:
     import dam.datasets as datasets
     from dam.evaluation.compare import _first_minutes
+
     if name == "demo":
         plan = demo_plan("vtl")
         models, channels, minutes = plan["models"], plan["channels"], plan["train_minutes"]
@@ -59,8 +69,16 @@ def run(name: str, n_jobs: int) -> dict:
         last[0] = now
 
     with tempfile.TemporaryDirectory() as tmp:
-        res = compare(models, train, "vtl:test", n_jobs=n_jobs, channels=channels, verbose=0, out=tmp,
-                      progress=tick if n_jobs == 1 else None)
+        res = compare(
+            models,
+            train,
+            "vtl:test",
+            n_jobs=n_jobs,
+            channels=channels,
+            verbose=0,
+            out=tmp,
+            progress=tick if n_jobs == 1 else None,
+        )
         seconds = time.perf_counter() - t0
         if name == "demo":  # the README shows the demo's figures
             for fig in ("predictions", "rmse"):
@@ -74,42 +92,67 @@ def run(name: str, n_jobs: int) -> dict:
         workers[workers.index(min(workers))] += sec
     two_cores = max(workers) + (cpu - sum(s for _, s in task_cpu)) if task_cpu else None
     clean = lambda v: None if isinstance(v, float) and not math.isfinite(v) else v  # noqa: E731
-    return {"name": name, "machine": machine(), "load_average_start": load0, "load_average_end": os.getloadavg(),
-            "n_jobs": n_jobs, "wall_seconds": seconds, "cpu_seconds": cpu, "corpus": res.corpus,
-            "task_cpu_seconds": task_cpu, "two_idle_cores_seconds": two_cores,
-            "train_minutes": round(train.duration / 60, 2), "train_utterances": len(train),
-            "fit_seconds_longest": max((r["fit_seconds"] for r in res.summary if r["status"] == "ok"), default=None),
-            "channels": list(channels) if channels else "all",
-            "models": [m if isinstance(m, str) else [m[0], m[1], m[2]] for m in models],
-            "summary": [{k: clean(v) for k, v in (r.as_dict() if hasattr(r, "as_dict") else r).items()}
-                        for r in res.summary],
-            "per_channel": res.per_channel, "best": res.best, "table": res.table()}
+    return {
+        "name": name,
+        "machine": machine(),
+        "load_average_start": load0,
+        "load_average_end": os.getloadavg(),
+        "n_jobs": n_jobs,
+        "wall_seconds": seconds,
+        "cpu_seconds": cpu,
+        "corpus": res.corpus,
+        "task_cpu_seconds": task_cpu,
+        "two_idle_cores_seconds": two_cores,
+        "train_minutes": round(train.duration / 60, 2),
+        "train_utterances": len(train),
+        "fit_seconds_longest": max((r["fit_seconds"] for r in res.summary if r["status"] == "ok"), default=None),
+        "channels": list(channels) if channels else "all",
+        "models": [m if isinstance(m, str) else [m[0], m[1], m[2]] for m in models],
+        "summary": [
+            {k: clean(v) for k, v in (r.as_dict() if hasattr(r, "as_dict") else r).items()} for r in res.summary
+        ],
+        "per_channel": res.per_channel,
+        "best": res.best,
+        "table": res.table(),
+    }
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("name", choices=["demo", "vtl-all", "taylor", "check"])
-    ap.add_argument("--jobs", type=int, default=1,
-                    help="joblib workers (default 1: then the CPU seconds of the whole run are measured)")
+    ap.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="joblib workers (default 1: then the CPU seconds of the whole run are measured)",
+    )
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)
     rec = run(args.name, args.jobs)
     out = Path(args.out)
     stem = f"compare_{args.name.replace('-', '_')}"
     from dam.corpus.atomic import atomic_write
+
     with atomic_write(out / f"{stem}.json") as fh:
         json.dump(rec, fh, indent=1)
     m = rec["machine"]
     with atomic_write(out / f"{stem}.md") as fh:
-        fh.write(f"# Comparison `{args.name}` on `vtl`\n\n"
-                 f"Machine: {m['cpu']}, {m['cores']} cores (shared; load average {rec['load_average_start'][0]:.1f} "
-                 f"at start, {rec['load_average_end'][0]:.1f} at end), Python {m['python']}, {m['date']}; "
-                 f"{rec['n_jobs']} joblib workers, {rec['wall_seconds']:.0f} s wall"
-                 + (f", {rec['cpu_seconds']:.0f} CPU s (on two idle cores: about {rec['two_idle_cores_seconds']:.0f} s)"
-                    if rec["cpu_seconds"] is not None else "") + ".\n"
-                 f"Training: {rec['train_utterances']} utterances, {rec['train_minutes']} min.\n"
-                 f"Channels: {', '.join(rec['channels']) if rec['channels'] != 'all' else 'all 19'}.\n\n"
-                 + rec["table"] + "\n")
+        fh.write(
+            f"# Comparison `{args.name}` on `vtl`\n\n"
+            f"Machine: {m['cpu']}, {m['cores']} cores (shared; load average {rec['load_average_start'][0]:.1f} "
+            f"at start, {rec['load_average_end'][0]:.1f} at end), Python {m['python']}, {m['date']}; "
+            f"{rec['n_jobs']} joblib workers, {rec['wall_seconds']:.0f} s wall"
+            + (
+                f", {rec['cpu_seconds']:.0f} CPU s (on two idle cores: about {rec['two_idle_cores_seconds']:.0f} s)"
+                if rec["cpu_seconds"] is not None
+                else ""
+            )
+            + ".\n"
+            f"Training: {rec['train_utterances']} utterances, {rec['train_minutes']} min.\n"
+            f"Channels: {', '.join(rec['channels']) if rec['channels'] != 'all' else 'all 19'}.\n\n"
+            + rec["table"]
+            + "\n"
+        )
     print(rec["table"])
     print(f"wrote {out / stem}.json and .md ({rec['wall_seconds']:.0f} s)", file=sys.stderr)
     return 0

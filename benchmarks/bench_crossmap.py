@@ -8,6 +8,7 @@ README's crossmap paragraph from the JSON.
 
     python benchmarks/bench_crossmap.py [--minutes 0.5 2]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,19 +46,26 @@ def main(argv=None) -> int:
                 runs.append(json.load(fh))
     rec = {"machine": machine(), "runs": runs}
     from dam.corpus.atomic import atomic_write
+
     with atomic_write(Path(args.out) / "crossmap_pipeline.json") as fh:
         json.dump(rec, fh, indent=1)
     models = list(runs[-1]["held_out"]["scores"])
-    lines = ["# The crossmap showcase by minutes of training phrases", "",
-             f"Machine: {rec['machine']['cpu']}, {rec['machine']['date']}. `examples/crossmap_pipeline.py`; "
-             "held-out RMSE of the rig controls (clipped to [0, 1]) on the same held-out phrases.", "",
-             "| minutes | phrases | key shapes | " + " | ".join(models) + " | DAM values outside [0, 1] |",
-             "|---:|---:|---:|" + "---:|" * (len(models) + 1)]
+    lines = [
+        "# The crossmap showcase by minutes of training phrases",
+        "",
+        f"Machine: {rec['machine']['cpu']}, {rec['machine']['date']}. `examples/crossmap_pipeline.py`; "
+        "held-out RMSE of the rig controls (clipped to [0, 1]) on the same held-out phrases.",
+        "",
+        "| minutes | phrases | key shapes | " + " | ".join(models) + " | DAM values outside [0, 1] |",
+        "|---:|---:|---:|" + "---:|" * (len(models) + 1),
+    ]
     for r in runs:
         sc = r["held_out"]["scores"]
-        lines.append(f"| {r['minutes']:g} | {r['captured']['train_utterances']} | {r['key_shapes']} | "
-                     + " | ".join(f"{sc[m]['rmse']:.4f}" for m in models)
-                     + f" | {100 * sc[models[0]]['outside_0_1_share']:.1f}% |")
+        lines.append(
+            f"| {r['minutes']:g} | {r['captured']['train_utterances']} | {r['key_shapes']} | "
+            + " | ".join(f"{sc[m]['rmse']:.4f}" for m in models)
+            + f" | {100 * sc[models[0]]['outside_0_1_share']:.1f}% |"
+        )
     with atomic_write(Path(args.out) / "crossmap_pipeline.md") as fh:
         fh.write("\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -13,6 +13,7 @@ loses). The paper reports average L2 norms of 0.4724 (DAM) vs 0.6297
 ``dam`` and ``dam-m0`` are the defaults (the weighted average,
 ``normalize=True``); "plain sum" rows are Eq. (2) as printed.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -24,7 +25,6 @@ from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -56,6 +56,7 @@ def split(name: str):
     or a 75/25 utterance split."""
     if os.path.isdir(name):
         from dam.corpus.io import load_corpus
+
         return load_corpus(os.path.join(name, "train")), load_corpus(os.path.join(name, "test"))
     try:
         return dam.datasets.load(name, "train"), dam.datasets.load(name, "test")
@@ -78,11 +79,19 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default="tiny", help="bundled corpus name, or a directory with train/ and test/")
     ap.add_argument("--quick", action="store_true", help="only phone-mean, dam-m0 and dam")
-    ap.add_argument("--variants", nargs="+", default=None, metavar="LABEL",
-                    help=f"labels of the variants to run (default all): {', '.join(v[0] for v in VARIANTS)}")
-    ap.add_argument("--append", action="store_true",
-                    help="merge the rows into the corpus's existing result file instead of replacing it "
-                         "(e.g. variants run by a second process)")
+    ap.add_argument(
+        "--variants",
+        nargs="+",
+        default=None,
+        metavar="LABEL",
+        help=f"labels of the variants to run (default all): {', '.join(v[0] for v in VARIANTS)}",
+    )
+    ap.add_argument(
+        "--append",
+        action="store_true",
+        help="merge the rows into the corpus's existing result file instead of replacing it "
+        "(e.g. variants run by a second process)",
+    )
     ap.add_argument("--out", default=str(Path(__file__).parent / "results"))
     args = ap.parse_args(argv)
     chosen = VARIANTS[:3] if args.quick else VARIANTS
@@ -92,8 +101,14 @@ def main(argv=None):
             ap.error(f"unknown variant label(s) {sorted(unknown)}; known: {[v[0] for v in VARIANTS]}")
         chosen = [v for v in VARIANTS if v[0] in args.variants]
     train, test = split(args.corpus)
-    res = {"machine": machine(), "corpus": args.corpus, "train": repr(train), "test": repr(test),
-           "channels": list(train.channels), "models": {}}
+    res = {
+        "machine": machine(),
+        "corpus": args.corpus,
+        "train": repr(train),
+        "test": repr(test),
+        "channels": list(train.channels),
+        "models": {},
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / ("dam_accuracy_" + Path(args.corpus.rstrip("/")).name)
@@ -103,18 +118,25 @@ def main(argv=None):
         model = dam.make(name, **params).fit(train)
         fit_s = time.perf_counter() - t0
         ev = evaluate(model, test)
-        res["models"][label] = {"model": name, "params": params, "fit_seconds": fit_s,
-                                "rmse": ev.rmse, "pearson_r": ev.pearson_r,
-                                "rmse_per_channel": [float(v) for v in ev.rmse_per_channel],
-                                "train_rmse": evaluate(model, train).rmse}
+        res["models"][label] = {
+            "model": name,
+            "params": params,
+            "fit_seconds": fit_s,
+            "rmse": ev.rmse,
+            "pearson_r": ev.pearson_r,
+            "rmse_per_channel": [float(v) for v in ev.rmse_per_channel],
+            "train_rmse": evaluate(model, train).rmse,
+        }
         if label in ("dam", "dam-m0"):
             per_phone[label] = per_phone_sq(model, test)
         if len(per_phone) == 2:
             (sq_d, n), (sq_m, _) = per_phone["dam"], per_phone["dam-m0"]
-            res["per_phone"] = {p: {"frames": n[p], "dam": (sq_d[p] / n[p]) ** 0.5,
-                                    "dam-m0": (sq_m[p] / n[p]) ** 0.5} for p in sorted(n)}
+            res["per_phone"] = {
+                p: {"frames": n[p], "dam": (sq_d[p] / n[p]) ** 0.5, "dam-m0": (sq_m[p] / n[p]) ** 0.5}
+                for p in sorted(n)
+            }
         print(f"{label:<24} held-out RMSE {ev.rmse:.4g}  r {ev.pearson_r:.3f}  fit {fit_s:.1f} s", file=sys.stderr)
-        _write(res, stem, args.append)     # after every model: a long run keeps what it has
+        _write(res, stem, args.append)  # after every model: a long run keeps what it has
     print(f"wrote {stem}.json and .md", file=sys.stderr)
 
 
@@ -127,32 +149,50 @@ def _write(res: dict, stem: Path, append: bool) -> None:
             merged["per_phone"] = res["per_phone"]
         res = merged
     order = [v[0] for v in VARIANTS]
-    res = {**res, "models": dict(sorted(res["models"].items(),
-                                        key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order)))}
+    res = {
+        **res,
+        "models": dict(
+            sorted(res["models"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order))
+        ),
+    }
     m = res["models"]
     if "dam" in m and "dam-m0" in m:
-        res["dam_vs_dam_m0"] = {"rmse_ratio": m["dam"]["rmse"] / m["dam-m0"]["rmse"],
-                                "paper_ratio": 0.4724 / 0.6297}
+        res["dam_vs_dam_m0"] = {"rmse_ratio": m["dam"]["rmse"] / m["dam-m0"]["rmse"], "paper_ratio": 0.4724 / 0.6297}
     stem.with_suffix(".json").write_text(json.dumps(res, indent=2))
     stem.with_suffix(".md").write_text(_markdown(res))
 
 
 def _markdown(r) -> str:
     ch = r["channels"]
-    lines = [f"# DAM held-out accuracy on the bundled corpus `{r['corpus']}`", "",
-             f"train: {r['train']}  ", f"test: {r['test']}  ", f"machine: {r['machine']['cpu']}, {r['machine']['date']}", "",
-             "| model | held-out RMSE | mean r | training RMSE | fit s | " + " | ".join(ch) + " |",
-             "|---|---:|---:|---:|---:|" + "---:|" * len(ch)]
+    lines = [
+        f"# DAM held-out accuracy on the bundled corpus `{r['corpus']}`",
+        "",
+        f"train: {r['train']}  ",
+        f"test: {r['test']}  ",
+        f"machine: {r['machine']['cpu']}, {r['machine']['date']}",
+        "",
+        "| model | held-out RMSE | mean r | training RMSE | fit s | " + " | ".join(ch) + " |",
+        "|---|---:|---:|---:|---:|" + "---:|" * len(ch),
+    ]
     for label, v in r["models"].items():
-        lines.append(f"| {label} | {v['rmse']:.4g} | {v['pearson_r']:.3f} | {v['train_rmse']:.4g} | "
-                     f"{v['fit_seconds']:.1f} | " + " | ".join(f"{x:.3g}" for x in v["rmse_per_channel"]) + " |")
+        lines.append(
+            f"| {label} | {v['rmse']:.4g} | {v['pearson_r']:.3f} | {v['train_rmse']:.4g} | "
+            f"{v['fit_seconds']:.1f} | " + " | ".join(f"{x:.3g}" for x in v["rmse_per_channel"]) + " |"
+        )
     if "dam_vs_dam_m0" in r:
         d = r["dam_vs_dam_m0"]
-        lines += ["", f"DAM / dam-m0 held-out RMSE: {d['rmse_ratio']:.3f} (the paper: 0.4724 / 0.6297 = "
-                      f"{d['paper_ratio']:.3f})."]
+        lines += [
+            "",
+            f"DAM / dam-m0 held-out RMSE: {d['rmse_ratio']:.3f} (the paper: 0.4724 / 0.6297 = {d['paper_ratio']:.3f}).",
+        ]
     if "per_phone" in r:
-        lines += ["", "Phones where the DAM loses to dam-m0 (RMSE on that phone's frames):", "",
-                  "| phone | frames | dam | dam-m0 |", "|---|---:|---:|---:|"]
+        lines += [
+            "",
+            "Phones where the DAM loses to dam-m0 (RMSE on that phone's frames):",
+            "",
+            "| phone | frames | dam | dam-m0 |",
+            "|---|---:|---:|---:|",
+        ]
         losing = [(p, v) for p, v in r["per_phone"].items() if v["dam"] > v["dam-m0"]]
         for p, v in sorted(losing, key=lambda pv: pv[1]["dam-m0"] - pv[1]["dam"]):
             lines.append(f"| {p} | {v['frames']} | {v['dam']:.4g} | {v['dam-m0']:.4g} |")

@@ -24,6 +24,7 @@ held-out RMSE per channel to ``benchmarks/results/dam_plainsum.json`` and
 ``--readme`` fills the README block between ``<!-- plainsum:start -->`` and
 ``<!-- plainsum:end -->`` from the results file (never typed by hand).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -73,8 +74,9 @@ def main(argv=None):
     if args.render:
         return write_markdown(json.loads((out / "dam_plainsum.json").read_text()), out)
     if args.readme:
-        return write_readme(json.loads((out / "dam_plainsum.json").read_text()),
-                            Path(__file__).resolve().parents[1] / "README.md")
+        return write_readme(
+            json.loads((out / "dam_plainsum.json").read_text()), Path(__file__).resolve().parents[1] / "README.md"
+        )
     train = dam.datasets.load("vtl", "train").select_channels(args.channels)
     test = dam.datasets.load("vtl", "test").select_channels(args.channels)
     rows = []
@@ -88,19 +90,28 @@ def main(argv=None):
             model.fit(train)
         fit_s = time.perf_counter() - t0
         tr, te = evaluate(model, train), evaluate(model, test)
-        row = {"label": label, "model": repr(model), "fit_seconds": fit_s,
-               "train_rmse": tr.rmse, "test_rmse": te.rmse,
-               "train_rmse_per_channel": list(map(float, tr.rmse_per_channel)),
-               "test_rmse_per_channel": list(map(float, te.rmse_per_channel))}
+        row = {
+            "label": label,
+            "model": repr(model),
+            "fit_seconds": fit_s,
+            "train_rmse": tr.rmse,
+            "test_rmse": te.rmse,
+            "train_rmse_per_channel": list(map(float, tr.rmse_per_channel)),
+            "test_rmse_per_channel": list(map(float, te.rmse_per_channel)),
+        }
         if hasattr(model, "sigma_"):
             row["sigma_quantiles_50_90_100"] = np.quantile(model.sigma_, [0.5, 0.9, 1.0]).tolist()
             row["objective_first_last"] = [[float(c[0]), float(c[-1])] for c in model.loss_curve_]
         rows.append(row)
         print(f"{label:>34}: train {tr.rmse:.4f} test {te.rmse:.4f} ({fit_s:.0f} s)", file=sys.stderr)
-    res = {"machine": machine(), "channels": args.channels, "rows": rows,
-           "paper": {"dam": 0.4724, "cohen_massaro": 0.6297}}
+    res = {
+        "machine": machine(),
+        "channels": args.channels,
+        "rows": rows,
+        "paper": {"dam": 0.4724, "cohen_massaro": 0.6297},
+    }
     out.mkdir(parents=True, exist_ok=True)
-    if args.variants and (out / "dam_plainsum.json").exists():   # merge into the previous run, in VARIANTS order
+    if args.variants and (out / "dam_plainsum.json").exists():  # merge into the previous run, in VARIANTS order
         old = json.loads((out / "dam_plainsum.json").read_text())
         if old["channels"] == args.channels:
             by = {r["label"]: r for r in old["rows"]}
@@ -112,12 +123,14 @@ def main(argv=None):
 
 
 def _table(res: dict) -> list:
-    lines = ["| variant | fit-time RMSE (start -> end of EM) | training RMSE | held-out RMSE |",
-             "|---|---|---:|---:|"]
+    lines = ["| variant | fit-time RMSE (start -> end of EM) | training RMSE | held-out RMSE |", "|---|---|---:|---:|"]
     for r in res["rows"]:
         obj = r.get("objective_first_last")
-        fit = "" if not obj else (f"{np.sqrt(np.mean([o[0] for o in obj])):.3f} -> "
-                                  f"{np.sqrt(np.mean([o[1] for o in obj])):.3f}")
+        fit = (
+            ""
+            if not obj
+            else (f"{np.sqrt(np.mean([o[0] for o in obj])):.3f} -> {np.sqrt(np.mean([o[1] for o in obj])):.3f}")
+        )
         lines.append(f"| {r['label']} | {fit} | {r['train_rmse']:.3f} | {r['test_rmse']:.3f} |")
     return lines
 
@@ -128,8 +141,9 @@ def write_readme(res: dict, readme: Path) -> None:
     text = readme.read_text()
     if start not in text or end not in text:
         raise SystemExit(f"{readme}: no {start} ... {end} block to fill")
-    block = "\n".join([start, "", f"Channels {', '.join(res['channels'])}, {res['machine']['date']}:", "",
-                       *_table(res), "", end])
+    block = "\n".join(
+        [start, "", f"Channels {', '.join(res['channels'])}, {res['machine']['date']}:", "", *_table(res), "", end]
+    )
     head, rest = text.split(start, 1)
     readme.write_text(head + block + rest.split(end, 1)[1])
     print(f"updated {readme}", file=sys.stderr)
@@ -141,21 +155,31 @@ def write_markdown(res: dict, out: Path) -> None:
     each training occurrence; "training" re-synthesizes the training utterances through predict,
     modes chosen by the search of Section VI as on held-out data."""
     chans = res["channels"]
-    lines = ["# The plain-sum Eq. (2) on the bundled `vtl` corpus", "",
-             f"Channels {', '.join(chans)}; {res['machine']['date']}. RMSE over the channels. "
-             "*fit-time*: the EM's objective (training modes from clustering); *training*: the training "
-             "utterances through `predict` (modes chosen by the search, as on held-out data).", "",
-             "| variant | fit-time RMSE (start -> end of EM) | training RMSE | held-out RMSE | "
-             + " | ".join(f"held-out {c}" for c in chans) + " | median / max sigma | fit s |",
-             "|---|---|---:|---:|" + "---:|" * len(chans) + "---|---:|"]
+    lines = [
+        "# The plain-sum Eq. (2) on the bundled `vtl` corpus",
+        "",
+        f"Channels {', '.join(chans)}; {res['machine']['date']}. RMSE over the channels. "
+        "*fit-time*: the EM's objective (training modes from clustering); *training*: the training "
+        "utterances through `predict` (modes chosen by the search, as on held-out data).",
+        "",
+        "| variant | fit-time RMSE (start -> end of EM) | training RMSE | held-out RMSE | "
+        + " | ".join(f"held-out {c}" for c in chans)
+        + " | median / max sigma | fit s |",
+        "|---|---|---:|---:|" + "---:|" * len(chans) + "---|---:|",
+    ]
     for r in res["rows"]:
         sig = r.get("sigma_quantiles_50_90_100")
         obj = r.get("objective_first_last")
-        fit = "" if not obj else (f"{np.sqrt(np.mean([o[0] for o in obj])):.4f} -> "
-                                  f"{np.sqrt(np.mean([o[1] for o in obj])):.4f}")
-        lines.append(f"| {r['label']} | {fit} | {r['train_rmse']:.4f} | {r['test_rmse']:.4f} | "
-                     + " | ".join(f"{v:.4f}" for v in r["test_rmse_per_channel"])
-                     + f" | {'' if sig is None else f'{sig[0]:.2f} / {sig[2]:.2f}'} | {r['fit_seconds']:.0f} |")
+        fit = (
+            ""
+            if not obj
+            else (f"{np.sqrt(np.mean([o[0] for o in obj])):.4f} -> {np.sqrt(np.mean([o[1] for o in obj])):.4f}")
+        )
+        lines.append(
+            f"| {r['label']} | {fit} | {r['train_rmse']:.4f} | {r['test_rmse']:.4f} | "
+            + " | ".join(f"{v:.4f}" for v in r["test_rmse_per_channel"])
+            + f" | {'' if sig is None else f'{sig[0]:.2f} / {sig[2]:.2f}'} | {r['fit_seconds']:.0f} |"
+        )
     (out / "dam_plainsum.md").write_text("\n".join(lines) + "\n")
     print(f"wrote {out / 'dam_plainsum.md'}", file=sys.stderr)
 

@@ -19,6 +19,7 @@ Writes ``benchmarks/results/export.json`` and ``export.md``.
 
     python benchmarks/bench_export.py
 """
+
 from __future__ import annotations
 
 import argparse
@@ -64,15 +65,25 @@ def bench_streaming(model, aligns):
         chunks.append(s.finish())
         worst = max(worst, float(np.abs(np.concatenate(chunks) - model.predict(a)).max()))
     lags = np.array(lags)
-    return {"max_duration_s": longest, "reach_durations": s.reach, "lookahead_s": s.lookahead,
-            "lookahead_frames": s.lookahead_frames, "lag_median_s": float(np.median(lags)),
-            "lag_p95_s": float(np.percentile(lags, 95)), "lag_max_s": float(lags.max()),
-            "push_us_median": 1e6 * float(np.median(push_s)), "push_us_p95": 1e6 * float(np.percentile(push_s, 95)),
-            "max_abs_diff_vs_batch": worst, "n_utterances": len(aligns), "n_phones": len(lags)}
+    return {
+        "max_duration_s": longest,
+        "reach_durations": s.reach,
+        "lookahead_s": s.lookahead,
+        "lookahead_frames": s.lookahead_frames,
+        "lag_median_s": float(np.median(lags)),
+        "lag_p95_s": float(np.percentile(lags, 95)),
+        "lag_max_s": float(lags.max()),
+        "push_us_median": 1e6 * float(np.median(push_s)),
+        "push_us_p95": 1e6 * float(np.percentile(push_s, 95)),
+        "max_abs_diff_vs_batch": worst,
+        "n_utterances": len(aligns),
+        "n_phones": len(lags),
+    }
 
 
 def load_runtime():
     import importlib.util
+
     spec = importlib.util.spec_from_file_location("dam_runtime", runtime_source())
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -88,9 +99,13 @@ def bench_runtime(model, aligns, tmp):
     t_rt = median_time(lambda: [rt.synthesize(a.labels, a.ends, a.starts) for a in aligns], repeat=5)
     t_tk = median_time(lambda: [model.predict(a) for a in aligns], repeat=5)
     diff = max(float(np.abs(rt.synthesize(a.labels, a.ends, a.starts) - model.predict(a)).max()) for a in aligns)
-    return {"runtime_us_per_phone": 1e6 * t_rt / n_phones, "toolkit_us_per_phone": 1e6 * t_tk / n_phones,
-            "max_abs_diff": diff, "n_phones": n_phones,
-            "runtime_module_lines": len(open(runtime_source(), encoding="utf-8").read().splitlines())}
+    return {
+        "runtime_us_per_phone": 1e6 * t_rt / n_phones,
+        "toolkit_us_per_phone": 1e6 * t_tk / n_phones,
+        "max_abs_diff": diff,
+        "n_phones": n_phones,
+        "runtime_module_lines": len(open(runtime_source(), encoding="utf-8").read().splitlines()),
+    }
 
 
 def bench_sizes(models, tmp):
@@ -131,14 +146,15 @@ def bench_gltf(model, tmp):
     paths = []
     for ext in ("glb", "gltf"):
         p = os.path.join(tmp, f"minute.{ext}")
-        out[f"{ext}_seconds"] = median_time(lambda p=p: export(y, p, channels=model.channels_,
-                                                               frame_rate=model.frame_rate_, alignment=a),
-                                            repeat=3)
+        out[f"{ext}_seconds"] = median_time(
+            lambda p=p: export(y, p, channels=model.channels_, frame_rate=model.frame_rate_, alignment=a), repeat=3
+        )
         out[f"{ext}_bytes"] = os.path.getsize(p)
         paths.append(p)
     try:
         sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "export"))
         import export_tools
+
         validate = export_tools.gltf_validator()
         reports = validate(paths)
         out["validator_errors"] = int(sum(r["issues"]["numErrors"] for r in reports.values()))
@@ -152,40 +168,56 @@ def bench_gltf(model, tmp):
 def markdown(res) -> str:
     s, r, g, t = res["streaming"], res["runtime"], res["gltf"], res["streaming_multimode_tiny"]
     lines = [
-        "# Animation out (benchmarks/bench_export.py)", "",
+        "# Animation out (benchmarks/bench_export.py)",
+        "",
         f"Machine: {res['machine']['cpu']}, {res['machine']['cores']} cores, Python {res['machine']['python']}, "
-        f"numpy {res['machine']['numpy']}; {res['machine']['date']}.", "",
-        "## Streaming (default DAM, held-out vtl utterances)", "",
+        f"numpy {res['machine']['numpy']}; {res['machine']['date']}.",
+        "",
+        "## Streaming (default DAM, held-out vtl utterances)",
+        "",
         "| stated lookahead | frames | lag median | lag p95 | lag max | per push (median / p95) | max diff vs batch |",
         "|---|---|---|---|---|---|---|",
         f"| {s['lookahead_s']:.3f} s (reach {s['reach_durations']:.2f} x longest phone {s['max_duration_s']:.3f} s) "
         f"| {s['lookahead_frames']} | {s['lag_median_s']:.3f} s | {s['lag_p95_s']:.3f} s | {s['lag_max_s']:.3f} s "
-        f"| {s['push_us_median']:.0f} / {s['push_us_p95']:.0f} us | {s['max_abs_diff_vs_batch']:.1e} |", "",
+        f"| {s['push_us_median']:.0f} / {s['push_us_p95']:.0f} us | {s['max_abs_diff_vs_batch']:.1e} |",
+        "",
         f"{s['n_phones']} phones in {s['n_utterances']} utterances. Lag: seconds from the end of the last phone "
         "pushed back to the first frame not yet final. The default DAM has one mode per phone; the DAM fitted "
         f"on tiny has several for most phones, so frames also wait until the modes are decided: on tiny's "
         f"{t['n_utterances']} utterances, stated lookahead {t['lookahead_s']:.3f} s, lag median "
         f"{t['lag_median_s']:.3f} s, p95 {t['lag_p95_s']:.3f} s, max {t['lag_max_s']:.3f} s, "
-        f"{t['push_us_median']:.0f} us per push, max diff vs batch {t['max_abs_diff_vs_batch']:.1e}.", "",
-        "## Tiny runtime (numpy only)", "",
-        "| runtime us/phone | toolkit predict us/phone | max abs diff | module lines |", "|---|---|---|---|",
+        f"{t['push_us_median']:.0f} us per push, max diff vs batch {t['max_abs_diff_vs_batch']:.1e}.",
+        "",
+        "## Tiny runtime (numpy only)",
+        "",
+        "| runtime us/phone | toolkit predict us/phone | max abs diff | module lines |",
+        "|---|---|---|---|",
         f"| {r['runtime_us_per_phone']:.1f} | {r['toolkit_us_per_phone']:.1f} | {r['max_abs_diff']:.1e} "
-        f"| {r['runtime_module_lines']} |", "",
-        "## Exported model size", "",
-        "| model | modes | channels | runtime .json | runtime .npz | toolkit model file |", "|---|---|---|---|---|---|",
+        f"| {r['runtime_module_lines']} |",
+        "",
+        "## Exported model size",
+        "",
+        "| model | modes | channels | runtime .json | runtime .npz | toolkit model file |",
+        "|---|---|---|---|---|---|",
     ]
     for name, row in res["sizes"].items():
-        lines.append(f"| {name} | {row['n_modes']} | {row['n_channels']} "
-                     f"| {row['runtime.json_bytes'] / 1024:.1f} kB "
-                     f"| {row['runtime.npz_bytes'] / 1024:.1f} kB | {row['toolkit_model_bytes'] / 1024:.1f} kB |")
-    lines += ["", "## glTF export of a one-minute utterance", "",
-              "| duration | frames x controls | .glb write | .glb size | .gltf write | .gltf size "
-              "| Khronos validator |",
-              "|---|---|---|---|---|---|---|",
-              f"| {g['duration_s']:.1f} s | {g['n_frames']} x {g['n_controls']} | {g['glb_seconds'] * 1e3:.0f} ms "
-              f"| {g['glb_bytes'] / 1024:.0f} kB | {g['gltf_seconds'] * 1e3:.0f} ms | {g['gltf_bytes'] / 1024:.0f} kB "
-              f"| {g.get('validator_errors', '-')} errors, {g.get('validator_warnings', '-')} warnings "
-              f"({g['validator']}) |", ""]
+        lines.append(
+            f"| {name} | {row['n_modes']} | {row['n_channels']} "
+            f"| {row['runtime.json_bytes'] / 1024:.1f} kB "
+            f"| {row['runtime.npz_bytes'] / 1024:.1f} kB | {row['toolkit_model_bytes'] / 1024:.1f} kB |"
+        )
+    lines += [
+        "",
+        "## glTF export of a one-minute utterance",
+        "",
+        "| duration | frames x controls | .glb write | .glb size | .gltf write | .gltf size | Khronos validator |",
+        "|---|---|---|---|---|---|---|",
+        f"| {g['duration_s']:.1f} s | {g['n_frames']} x {g['n_controls']} | {g['glb_seconds'] * 1e3:.0f} ms "
+        f"| {g['glb_bytes'] / 1024:.0f} kB | {g['gltf_seconds'] * 1e3:.0f} ms | {g['gltf_bytes'] / 1024:.0f} kB "
+        f"| {g.get('validator_errors', '-')} errors, {g.get('validator_warnings', '-')} warnings "
+        f"({g['validator']}) |",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -198,12 +230,15 @@ def main(argv=None):
     aligns = held_out(model, args.utterances)
     tiny = dam.make("dam").fit(dam.datasets.load("tiny"))
     with tempfile.TemporaryDirectory() as tmp:
-        res = {"machine": machine(), "streaming": bench_streaming(model, aligns),
-               # the default DAM has one mode per phone; tiny's has several: modes wait for agreement
-               "streaming_multimode_tiny": bench_streaming(tiny, dam.datasets.load("tiny").alignments),
-               "runtime": bench_runtime(model, aligns, tmp),
-               "sizes": bench_sizes({"default (vtl)": model, "tiny": tiny}, tmp),
-               "gltf": bench_gltf(model, tmp)}
+        res = {
+            "machine": machine(),
+            "streaming": bench_streaming(model, aligns),
+            # the default DAM has one mode per phone; tiny's has several: modes wait for agreement
+            "streaming_multimode_tiny": bench_streaming(tiny, dam.datasets.load("tiny").alignments),
+            "runtime": bench_runtime(model, aligns, tmp),
+            "sizes": bench_sizes({"default (vtl)": model, "tiny": tiny}, tmp),
+            "gltf": bench_gltf(model, tmp),
+        }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "export.json").write_text(json.dumps(res, indent=2) + "\n")

@@ -14,6 +14,7 @@ Writes ``benchmarks/results/hmm_dv.json`` and ``hmm_dv.md``.
 
     python benchmarks/bench_hmm_dv.py [--repeat 3] [--neural] [--channels JA,LP,TTY]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,8 +31,13 @@ import dam  # noqa: E402
 from dam.corpus import window_dilation  # noqa: E402
 from dam.corpus.atomic import atomic_write  # noqa: E402
 
-MODELS = [("phone-mean", {}), ("hmm", {}), ("dynamic-visemes", {}),
-          ("dtree", {"window_rate": None}), ("dtree", {"window_rate": 30.0})]
+MODELS = [
+    ("phone-mean", {}),
+    ("hmm", {}),
+    ("dynamic-visemes", {}),
+    ("dtree", {"window_rate": None}),
+    ("dtree", {"window_rate": 30.0}),
+]
 NEURAL = [("sliding-dnn", {"window_rate": None, "verbose": 0}), ("sliding-dnn", {"window_rate": 30.0, "verbose": 0})]
 
 
@@ -60,8 +66,13 @@ def main(argv=None):
         fit_s = time.perf_counter() - t0
         t = median_time(lambda m=model: m.predict(test.alignments), repeat=args.repeat)
         ev = dam.evaluate(model, test)
-        row = {"model": _label(name, params), "fit_seconds": fit_s, "us_per_phone": 1e6 * t / n_phones,
-               "rmse": ev.rmse, "pearson_r": ev.pearson_r}
+        row = {
+            "model": _label(name, params),
+            "fit_seconds": fit_s,
+            "us_per_phone": 1e6 * t / n_phones,
+            "rmse": ev.rmse,
+            "pearson_r": ev.pearson_r,
+        }
         if "window_rate" in params:
             d = window_dilation(train.frame_rate, params["window_rate"])
             row["dilation"] = d
@@ -72,24 +83,36 @@ def main(argv=None):
             row["units"], row["dynamic_visemes"] = int(len(model.unit_cluster_)), int(len(model.centroids_))
         rows.append(row)
         print(f"{row['model']}: fit {fit_s:.1f} s, RMSE {ev.rmse:.4f}, r {ev.pearson_r:.3f}", file=sys.stderr)
-    res = {"machine": machine(), "corpus": "vtl", "channels": list(train.channels), "frame_rate": train.frame_rate,
-           "train_utterances": len(train), "test_utterances": len(test), "test_phones": n_phones, "rows": rows}
+    res = {
+        "machine": machine(),
+        "corpus": "vtl",
+        "channels": list(train.channels),
+        "frame_rate": train.frame_rate,
+        "train_utterances": len(train),
+        "test_utterances": len(test),
+        "test_phones": n_phones,
+        "rows": rows,
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with atomic_write(out / "hmm_dv.json") as fh:
         fh.write(json.dumps(res, indent=2) + "\n")
-    lines = ["| model | input span (s) | fit (s) | synthesis (µs/phone) | RMSE | r |",
-             "|---|---:|---:|---:|---:|---:|"]
+    lines = ["| model | input span (s) | fit (s) | synthesis (µs/phone) | RMSE | r |", "|---|---:|---:|---:|---:|---:|"]
     for r in sorted(rows, key=lambda r: r["rmse"]):
         span = f"{r['input_span_seconds']:.2f}" if "input_span_seconds" in r else ""
-        lines.append(f"| {r['model']} | {span} | {r['fit_seconds']:.1f} | {r['us_per_phone']:.0f} | "
-                     f"{r['rmse']:.4f} | {r['pearson_r']:.3f} |")
+        lines.append(
+            f"| {r['model']} | {span} | {r['fit_seconds']:.1f} | {r['us_per_phone']:.0f} | "
+            f"{r['rmse']:.4f} | {r['pearson_r']:.3f} |"
+        )
     m = res["machine"]
-    lines += ["", f"vtl: fit on {len(train)} utterances ({len(train.channels)} channels at {train.frame_rate:g} Hz), "
-              f"evaluated on {len(test)} held-out utterances ({n_phones} phones). RMSE in channel units over all "
-              f"frames and channels; r per channel, averaged. Input span: the seconds the {11}-frame input window "
-              f"covers (the paper's: 11 frames at 29.97 Hz = 0.37 s). Machine: {m['cpu']}, {m['cores']} cores, "
-              f"numpy {m['numpy']}, {m['date']} (shared with other jobs: times are upper bounds)."]
+    lines += [
+        "",
+        f"vtl: fit on {len(train)} utterances ({len(train.channels)} channels at {train.frame_rate:g} Hz), "
+        f"evaluated on {len(test)} held-out utterances ({n_phones} phones). RMSE in channel units over all "
+        f"frames and channels; r per channel, averaged. Input span: the seconds the {11}-frame input window "
+        f"covers (the paper's: 11 frames at 29.97 Hz = 0.37 s). Machine: {m['cpu']}, {m['cores']} cores, "
+        f"numpy {m['numpy']}, {m['date']} (shared with other jobs: times are upper bounds).",
+    ]
     with atomic_write(out / "hmm_dv.md") as fh:
         fh.write("\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -6,6 +6,7 @@ the ratio says what the TextGrid parsing and validation cost on top.
 
     python benchmarks/bench_io.py [--utterances 300]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,16 +37,23 @@ def main(argv=None):
         t_load = median_time(lambda: load_corpus(d), repeat=5)
         t_ref = median_time(lambda: [np.loadtxt(p, delimiter=",", skiprows=1) for p in csvs], repeat=5)
         corpus = load_corpus(d)
-    res = {"machine": machine(), "utterances": len(corpus), "minutes": corpus.duration / 60,
-           "load_corpus_seconds_median": t_load, "numpy_loadtxt_seconds_median": t_ref,
-           "ratio_to_loadtxt": t_load / t_ref}
+    res = {
+        "machine": machine(),
+        "utterances": len(corpus),
+        "minutes": corpus.duration / 60,
+        "load_corpus_seconds_median": t_load,
+        "numpy_loadtxt_seconds_median": t_ref,
+        "ratio_to_loadtxt": t_load / t_ref,
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "io.json").write_text(json.dumps(res, indent=2) + "\n")
-    md = (f"| utterances | minutes | load_corpus (median s) | numpy.loadtxt of the CSVs (s) | ratio |\n"
-          f"|---|---|---|---|---|\n| {len(corpus)} | {corpus.duration / 60:.1f} | {t_load:.3f} | {t_ref:.3f} "
-          f"| {t_load / t_ref:.2f} |\n\nMachine: {res['machine']['cpu']}, {res['machine']['cores']} cores, "
-          f"{res['machine']['date']}\n")
+    md = (
+        f"| utterances | minutes | load_corpus (median s) | numpy.loadtxt of the CSVs (s) | ratio |\n"
+        f"|---|---|---|---|---|\n| {len(corpus)} | {corpus.duration / 60:.1f} | {t_load:.3f} | {t_ref:.3f} "
+        f"| {t_load / t_ref:.2f} |\n\nMachine: {res['machine']['cpu']}, {res['machine']['cores']} cores, "
+        f"{res['machine']['date']}\n"
+    )
     (out / "io.md").write_text(md)
     print(md)
 

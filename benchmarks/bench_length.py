@@ -12,6 +12,7 @@ shows as time and memory doubling from 5 to 10 minutes (not quadrupling).
 
     python benchmarks/bench_length.py [--minutes 1 2 5 10] [--models dam cohen-massaro mmm phone-mean]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -66,7 +67,7 @@ def _status_kib(field: str) -> int:
 
 def measure(fn):
     """(result, seconds, peak MiB above the resident memory before the call)."""
-    with open("/proc/self/clear_refs", "w") as f:   # resets the peak (VmHWM) to the current RSS
+    with open("/proc/self/clear_refs", "w") as f:  # resets the peak (VmHWM) to the current RSS
         f.write("5")
     base = _status_kib("VmRSS")
     t0 = time.perf_counter()
@@ -93,6 +94,7 @@ def _predict_child(path, corpus, queue):
 
 def _in_child(target, *args):
     import multiprocessing as mp
+
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
     proc = ctx.Process(target=target, args=(*args, queue))
@@ -106,6 +108,7 @@ def run_isolated(name, corpus):
     """Fit ``name`` on ``corpus`` in one forked child and predict with the saved model in another
     (so neither reuses memory the other freed): (fit s, fit MiB, predict s, predict MiB, rmse)."""
     import tempfile
+
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "model.dam")
         fit_s, fit_mb = _in_child(_fit_child, name, corpus, path)
@@ -120,7 +123,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     rows = []
     warm = corpus_of(0.3).select_channels(["c0", "c1"])
-    with warnings.catch_warnings():            # imports (scipy, scikit-learn) out of the measured runs
+    with warnings.catch_warnings():  # imports (scipy, scikit-learn) out of the measured runs
         warnings.simplefilter("ignore")
         for name in args.models:
             dam.make(name).fit(warm).predict(warm[0].alignment)
@@ -129,26 +132,45 @@ def main(argv=None):
         u = corpus[0]
         for name in args.models:
             fit_s, fit_mb, pred_s, pred_mb, rmse = run_isolated(name, corpus)
-            rows.append({"model": name, "minutes": u.duration / 60, "frames": u.n_frames,
-                         "segments": len(u.alignment), "fit_seconds": fit_s, "fit_peak_mib": fit_mb,
-                         "predict_seconds": pred_s, "predict_peak_mib": pred_mb, "training_rmse": rmse})
-            print(f"{name:>14} {minutes:>4} min: fit {fit_s:.1f} s {fit_mb:.0f} MiB, predict {pred_s:.2f} s "
-                  f"{pred_mb:.0f} MiB", file=sys.stderr)
+            rows.append(
+                {
+                    "model": name,
+                    "minutes": u.duration / 60,
+                    "frames": u.n_frames,
+                    "segments": len(u.alignment),
+                    "fit_seconds": fit_s,
+                    "fit_peak_mib": fit_mb,
+                    "predict_seconds": pred_s,
+                    "predict_peak_mib": pred_mb,
+                    "training_rmse": rmse,
+                }
+            )
+            print(
+                f"{name:>14} {minutes:>4} min: fit {fit_s:.1f} s {fit_mb:.0f} MiB, predict {pred_s:.2f} s "
+                f"{pred_mb:.0f} MiB",
+                file=sys.stderr,
+            )
     res = {"machine": machine(), "load_average": os.getloadavg(), "channels": N_CH, "rows": rows}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "length.json").write_text(json.dumps(res, indent=2))
     m = res["machine"]
-    lines = ["# Cost against the length of one utterance", "",
-             f"{m['date']}, {m['cpu']}, {m['cores']} cores (shared; load average {res['load_average'][0]:.1f}). "
-             f"Synthetic phrases joined into one utterance, {N_CH} channels at 100 frames/s; peak resident "
-             "memory above the process's before the call (a forked child for the fit, another for predict with the saved model), time in the same run.", "",
-             "| model | minutes | frames | segments | fit s | fit peak MiB | predict s | predict peak MiB |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "# Cost against the length of one utterance",
+        "",
+        f"{m['date']}, {m['cpu']}, {m['cores']} cores (shared; load average {res['load_average'][0]:.1f}). "
+        f"Synthetic phrases joined into one utterance, {N_CH} channels at 100 frames/s; peak resident "
+        "memory above the process's before the call (a forked child for the fit, another for predict with the saved model), time in the same run.",
+        "",
+        "| model | minutes | frames | segments | fit s | fit peak MiB | predict s | predict peak MiB |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for r in sorted(rows, key=lambda r: (r["model"], r["minutes"])):
-        lines.append(f"| {r['model']} | {r['minutes']:.1f} | {r['frames']} | {r['segments']} | "
-                     f"{r['fit_seconds']:.2f} | {r['fit_peak_mib']:.1f} | {r['predict_seconds']:.3f} | "
-                     f"{r['predict_peak_mib']:.1f} |")
+        lines.append(
+            f"| {r['model']} | {r['minutes']:.1f} | {r['frames']} | {r['segments']} | "
+            f"{r['fit_seconds']:.2f} | {r['fit_peak_mib']:.1f} | {r['predict_seconds']:.3f} | "
+            f"{r['predict_peak_mib']:.1f} |"
+        )
     (out / "length.md").write_text("\n".join(lines) + "\n")
     print(f"wrote {out / 'length.md'}", file=sys.stderr)
 

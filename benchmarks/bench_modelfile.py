@@ -8,6 +8,7 @@ of the intact file (median), the reference being ``numpy.load`` of the same arch
 
     python benchmarks/bench_modelfile.py
 """
+
 from __future__ import annotations
 
 import argparse
@@ -58,17 +59,25 @@ def main(argv=None):
                 outcomes["identical predictions" if np.array_equal(y, expected) else "DIFFERENT predictions"] += 1
         t_load = median_time(lambda: dam.load(src), repeat=7)
         t_ref = median_time(lambda: dict(np.load(src, allow_pickle=False)), repeat=7)
-    res = {"machine": machine(), "file_bytes": len(raw), "outcomes": dict(outcomes), "other_examples": others[:10],
-           "load_seconds_median": t_load, "numpy_load_seconds_median": t_ref}
+    res = {
+        "machine": machine(),
+        "file_bytes": len(raw),
+        "outcomes": dict(outcomes),
+        "other_examples": others[:10],
+        "load_seconds_median": t_load,
+        "numpy_load_seconds_median": t_ref,
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "modelfile.json").write_text(json.dumps(res, indent=2) + "\n")
     rows = "\n".join(f"| {k} | {v} |" for k, v in sorted(outcomes.items()))
-    md = (f"Every byte of a {len(raw)}-byte DAM model file flipped (XOR 0xFF), then loaded and used:\n\n"
-          f"| outcome | flips |\n|---|---|\n{rows}\n\n"
-          f"`dam.load` of the intact file: {1e3 * t_load:.2f} ms (median); `numpy.load` of the same archive "
-          f"{1e3 * t_ref:.2f} ms.\n\nMachine: {res['machine']['cpu']}, {res['machine']['cores']} cores, "
-          f"{res['machine']['date']}\n")
+    md = (
+        f"Every byte of a {len(raw)}-byte DAM model file flipped (XOR 0xFF), then loaded and used:\n\n"
+        f"| outcome | flips |\n|---|---|\n{rows}\n\n"
+        f"`dam.load` of the intact file: {1e3 * t_load:.2f} ms (median); `numpy.load` of the same archive "
+        f"{1e3 * t_ref:.2f} ms.\n\nMachine: {res['machine']['cpu']}, {res['machine']['cores']} cores, "
+        f"{res['machine']['date']}\n"
+    )
     (out / "modelfile.md").write_text(md)
     print(md)
 

@@ -22,6 +22,7 @@ so the rows can be read beside the classical models'.
 
     python benchmarks/bench_nn.py [--corpus vtl] [--models sliding-dnn gru ...] [--repeat 5]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -53,13 +54,18 @@ MODELS = {
     "bi-gru-5L": ("gru", {"n_layers": 5, "bidirectional": True, "hidden_size": 32, "max_epochs": 20}),
     "transformer": ("transformer", {}),
 }
-PAPERS = {"taylor2017_frames_per_second": 1000.0, "medina2022_ms_per_second_mlp": 0.232,
-          "medina2022_ms_per_second_bi_gru_5l": 10.955, "medina2022_ms_per_second_gru_5l": 5.339,
-          "medina2022_ms_per_second_transformer": 3.515}
+PAPERS = {
+    "taylor2017_frames_per_second": 1000.0,
+    "medina2022_ms_per_second_mlp": 0.232,
+    "medina2022_ms_per_second_bi_gru_5l": 10.955,
+    "medina2022_ms_per_second_gru_5l": 5.339,
+    "medina2022_ms_per_second_transformer": 3.515,
+}
 
 
 def load_corpus(name: str):
     from dam import datasets
+
     if name == "tiny":
         return dam.datasets.load("tiny").train_test_split(0.25, random_state=0)
     return datasets.load(name, split="train"), datasets.load(name, split="test")
@@ -76,7 +82,7 @@ def bench_model(label, name, params, train, test, repeat):
     fit_s = time.perf_counter() - t0
     alignments = test.alignments
     t0 = time.perf_counter()
-    preds = model.predict(alignments)          # first call: compiles the jitted networks
+    preds = model.predict(alignments)  # first call: compiles the jitted networks
     first_s = time.perf_counter() - t0
     times = []
     for _ in range(repeat):
@@ -91,11 +97,22 @@ def bench_model(label, name, params, train, test, repeat):
     lo, hi = bootstrap_rmse_ci(sse, cnt)
     n_frames = sum(u.n_frames for u in test)
     seconds = n_frames / test.frame_rate
-    row = {"model": label, "name": name, "params": params, "rmse": ev.rmse, "rmse_ci_low": lo, "rmse_ci_high": hi,
-           "pearson_r": ev.pearson_r, "fit_seconds": fit_s,
-           "predict_us_per_phone": 1e6 * pred_s / sum(len(a) for a in alignments),
-           "frames_per_second": n_frames / pred_s, "ms_per_second_of_speech": 1e3 * pred_s / seconds,
-           "first_call_seconds": first_s, "predict_seconds_median": pred_s, "predict_runs": repeat}
+    row = {
+        "model": label,
+        "name": name,
+        "params": params,
+        "rmse": ev.rmse,
+        "rmse_ci_low": lo,
+        "rmse_ci_high": hi,
+        "pearson_r": ev.pearson_r,
+        "fit_seconds": fit_s,
+        "predict_us_per_phone": 1e6 * pred_s / sum(len(a) for a in alignments),
+        "frames_per_second": n_frames / pred_s,
+        "ms_per_second_of_speech": 1e3 * pred_s / seconds,
+        "first_call_seconds": first_s,
+        "predict_seconds_median": pred_s,
+        "predict_runs": repeat,
+    }
     for attr in ("n_epochs_", "best_epoch_", "n_parameters_"):
         if hasattr(model, attr):
             row[attr.rstrip("_")] = int(getattr(model, attr))
@@ -112,20 +129,33 @@ def main(argv=None):
 
     train, test = load_corpus(args.corpus)
     import jax
-    res = {"machine": {**machine(), "jax": jax.__version__, "jax_backend": jax.default_backend()},
-           "load_average_start": os.getloadavg(), "corpus": args.corpus,
-           "train": {"utterances": len(train), "minutes": train.duration / 60, "channels": train.n_channels,
-                     "frame_rate": train.frame_rate},
-           "test": {"utterances": len(test), "minutes": test.duration / 60},
-           "papers": PAPERS, "rows": []}
+
+    res = {
+        "machine": {**machine(), "jax": jax.__version__, "jax_backend": jax.default_backend()},
+        "load_average_start": os.getloadavg(),
+        "corpus": args.corpus,
+        "train": {
+            "utterances": len(train),
+            "minutes": train.duration / 60,
+            "channels": train.n_channels,
+            "frame_rate": train.frame_rate,
+        },
+        "test": {"utterances": len(test), "minutes": test.duration / 60},
+        "papers": PAPERS,
+        "rows": [],
+    }
     labels = ["phone-mean"] + [m for m in args.models if m != "phone-mean"]
     for label in labels:
         name, params = MODELS[label]
         print(f"{label}: fitting on {train.duration / 60:.1f} min ...", file=sys.stderr, flush=True)
         row = bench_model(label, name, params, train, test, args.repeat)
         res["rows"].append(row)
-        print(f"  fit {row['fit_seconds']:.1f} s, RMSE {row['rmse']:.4g}, {row['frames_per_second']:.0f} frames/s, "
-              f"{row['ms_per_second_of_speech']:.2f} ms per s of speech", file=sys.stderr, flush=True)
+        print(
+            f"  fit {row['fit_seconds']:.1f} s, RMSE {row['rmse']:.4g}, {row['frames_per_second']:.0f} frames/s, "
+            f"{row['ms_per_second_of_speech']:.2f} ms per s of speech",
+            file=sys.stderr,
+            flush=True,
+        )
     ref = res["rows"][0]
     for r in res["rows"]:
         r["synthesis_time_vs_phone_mean"] = r["predict_seconds_median"] / ref["predict_seconds_median"]
@@ -139,33 +169,43 @@ def main(argv=None):
 
 def markdown(r) -> str:
     m = r["machine"]
-    lines = ["# Neural predictors benchmark", "",
-             f"Machine: {m['cpu']}, {m['cores']} cores (shared; load average {r['load_average_start'][0]:.1f} at "
-             f"start, {r['load_average_end'][0]:.1f} at end), Python {m['python']}, jax {m['jax']} "
-             f"({m['jax_backend']}), {m['date']}.",
-             f"Corpus: `{r['corpus']}`, train {r['train']['minutes']:.1f} min ({r['train']['utterances']} utterances, "
-             f"{r['train']['channels']} channels at {r['train']['frame_rate']:g} Hz), test "
-             f"{r['test']['minutes']:.1f} min ({r['test']['utterances']} utterances).", "",
-             "The first columns are those of `dam compare`. Synthesis is warm (median of "
-             f"{r['rows'][0]['predict_runs']} passes over the test alignments, one per call); the first, "
-             "compiling call is listed apart. Fit = one training run with early stopping on 10% of the "
-             "training utterances.", "",
-             "| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | ms per s of speech | "
-             "first call s | x phone-mean time | epochs (kept) | parameters |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "# Neural predictors benchmark",
+        "",
+        f"Machine: {m['cpu']}, {m['cores']} cores (shared; load average {r['load_average_start'][0]:.1f} at "
+        f"start, {r['load_average_end'][0]:.1f} at end), Python {m['python']}, jax {m['jax']} "
+        f"({m['jax_backend']}), {m['date']}.",
+        f"Corpus: `{r['corpus']}`, train {r['train']['minutes']:.1f} min ({r['train']['utterances']} utterances, "
+        f"{r['train']['channels']} channels at {r['train']['frame_rate']:g} Hz), test "
+        f"{r['test']['minutes']:.1f} min ({r['test']['utterances']} utterances).",
+        "",
+        "The first columns are those of `dam compare`. Synthesis is warm (median of "
+        f"{r['rows'][0]['predict_runs']} passes over the test alignments, one per call); the first, "
+        "compiling call is listed apart. Fit = one training run with early stopping on 10% of the "
+        "training utterances.",
+        "",
+        "| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | ms per s of speech | "
+        "first call s | x phone-mean time | epochs (kept) | parameters |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for x in r["rows"]:
         ep = f"{x['n_epochs']} ({x['best_epoch']})" if "n_epochs" in x else ""
-        lines.append(f"| {x['model']} | {x['rmse']:.4g} | {x['rmse_ci_low']:.4g}–{x['rmse_ci_high']:.4g} | "
-                     f"{x['pearson_r']:.3f} | {x['fit_seconds']:.1f} | {x['predict_us_per_phone']:.0f} | "
-                     f"{x['frames_per_second']:.3g} | {x['ms_per_second_of_speech']:.2f} | "
-                     f"{x['first_call_seconds']:.2f} | {x['synthesis_time_vs_phone_mean']:.0f} | {ep} | "
-                     f"{x.get('n_parameters', '')} |")
+        lines.append(
+            f"| {x['model']} | {x['rmse']:.4g} | {x['rmse_ci_low']:.4g}–{x['rmse_ci_high']:.4g} | "
+            f"{x['pearson_r']:.3f} | {x['fit_seconds']:.1f} | {x['predict_us_per_phone']:.0f} | "
+            f"{x['frames_per_second']:.3g} | {x['ms_per_second_of_speech']:.2f} | "
+            f"{x['first_call_seconds']:.2f} | {x['synthesis_time_vs_phone_mean']:.0f} | {ep} | "
+            f"{x.get('n_parameters', '')} |"
+        )
     p = r["papers"]
-    lines += ["", f"Papers: Taylor et al. (2017) about {p['taylor2017_frames_per_second']:.0f} frames/s for the "
-                  f"sliding-window network (GPU); Medina et al. (2022), ms per second of audio: MLP 15:5 "
-                  f"{p['medina2022_ms_per_second_mlp']}, GRU-5L {p['medina2022_ms_per_second_gru_5l']}, "
-                  f"Bi-GRU-5L {p['medina2022_ms_per_second_bi_gru_5l']}, Transformer "
-                  f"{p['medina2022_ms_per_second_transformer']}."]
+    lines += [
+        "",
+        f"Papers: Taylor et al. (2017) about {p['taylor2017_frames_per_second']:.0f} frames/s for the "
+        f"sliding-window network (GPU); Medina et al. (2022), ms per second of audio: MLP 15:5 "
+        f"{p['medina2022_ms_per_second_mlp']}, GRU-5L {p['medina2022_ms_per_second_gru_5l']}, "
+        f"Bi-GRU-5L {p['medina2022_ms_per_second_bi_gru_5l']}, Transformer "
+        f"{p['medina2022_ms_per_second_transformer']}.",
+    ]
     return "\n".join(lines) + "\n"
 
 

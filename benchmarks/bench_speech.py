@@ -19,6 +19,7 @@ Writes ``benchmarks/results/speech.json`` and ``speech.md``.
 
     python benchmarks/bench_speech.py
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,11 +40,18 @@ from dam.speech import DurationModel, PhoneApproximationWarning, align, phone_er
 from dam.speech.aligner import onset_errors  # noqa: E402
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "speech"
-HARVARD = ["The birch canoe slid on the smooth planks.", "Glue the sheet to the dark blue background.",
-           "It's easy to tell the depth of a well.", "These days a chicken leg is a rare dish.",
-           "Rice is often served in round bowls.", "The juice of lemons makes fine punch.",
-           "The box was thrown beside the parked truck.", "The hogs were fed chopped corn and garbage.",
-           "Four hours of steady work faced us.", "A large size in stockings is hard to sell."]
+HARVARD = [
+    "The birch canoe slid on the smooth planks.",
+    "Glue the sheet to the dark blue background.",
+    "It's easy to tell the depth of a well.",
+    "These days a chicken leg is a rare dish.",
+    "Rice is often served in round bowls.",
+    "The juice of lemons makes fine punch.",
+    "The box was thrown beside the parked truck.",
+    "The hogs were fed chopped corn and garbage.",
+    "Four hours of steady work faced us.",
+    "A large size in stockings is hard to sell.",
+]
 
 
 def bench_alignment():
@@ -66,20 +74,31 @@ def bench_alignment():
         per_hyp.append(hyp)
         per_ref.append(ref)
         results[meta_path.stem] = r
-        rows.append({"file": truth["audio"], "seconds_audio": r.duration, "rate_hz": truth["sample_rate"],
-                     "format": f"{truth['subtype']}, {truth['channels']} ch", "rtf_cold": cold / r.duration,
-                     "rtf_warm": warm / r.duration, "rtf_phone_recognition": rec_time / r.duration,
-                     "median_phone_onset_error_ms": 1000 * float(np.median(p)) if p else None,
-                     "phones_compared": len(p)})
+        rows.append(
+            {
+                "file": truth["audio"],
+                "seconds_audio": r.duration,
+                "rate_hz": truth["sample_rate"],
+                "format": f"{truth['subtype']}, {truth['channels']} ch",
+                "rtf_cold": cold / r.duration,
+                "rtf_warm": warm / r.duration,
+                "rtf_phone_recognition": rec_time / r.duration,
+                "median_phone_onset_error_ms": 1000 * float(np.median(p)) if p else None,
+                "phones_compared": len(p),
+            }
+        )
     p_all, w_all = np.array(p_all), np.array(w_all)
-    summary = {"median_phone_onset_error_ms": 1000 * float(np.median(p_all)),
-               "p90_phone_onset_error_ms": 1000 * float(np.percentile(p_all, 90)),
-               "share_within_50ms": float(np.mean(p_all <= 0.05)),
-               "median_word_onset_error_ms": 1000 * float(np.median(w_all)),
-               "phones_compared": int(len(p_all)), "words_compared": int(len(w_all)),
-               "rtf_cold_median": float(np.median([r["rtf_cold"] for r in rows])),
-               "rtf_warm_median": float(np.median([r["rtf_warm"] for r in rows])),
-               "phone_recognition_per": phone_error_rate(per_hyp, per_ref)}
+    summary = {
+        "median_phone_onset_error_ms": 1000 * float(np.median(p_all)),
+        "p90_phone_onset_error_ms": 1000 * float(np.percentile(p_all, 90)),
+        "share_within_50ms": float(np.mean(p_all <= 0.05)),
+        "median_word_onset_error_ms": 1000 * float(np.median(w_all)),
+        "phones_compared": int(len(p_all)),
+        "words_compared": int(len(w_all)),
+        "rtf_cold_median": float(np.median([r["rtf_cold"] for r in rows])),
+        "rtf_warm_median": float(np.median([r["rtf_warm"] for r in rows])),
+        "phone_recognition_per": phone_error_rate(per_hyp, per_ref),
+    }
     return rows, summary, results
 
 
@@ -90,13 +109,19 @@ def bench_text():
         n_phones = sum(len(dam.animate(text=s).alignment.labels) for s in HARVARD)
         t = median_time(lambda: [dam.animate(text=s) for s in HARVARD], repeat=5)
         from dam.speech import load_default_model
+
         model = load_default_model()
         aligns = [dam.animate(text=s).alignment for s in HARVARD]
         t_synth = median_time(lambda: [model.predict(a) for a in aligns], repeat=5)
         t_cold = _cold_start()
-    return {"sentences": len(HARVARD), "phones": n_phones, "us_per_phone": 1e6 * t / n_phones,
-            "us_per_phone_synthesis_only": 1e6 * t_synth / n_phones,
-            "seconds_per_sentence": t / len(HARVARD), "first_call_seconds_in_a_new_process": t_cold}
+    return {
+        "sentences": len(HARVARD),
+        "phones": n_phones,
+        "us_per_phone": 1e6 * t / n_phones,
+        "us_per_phone_synthesis_only": 1e6 * t_synth / n_phones,
+        "seconds_per_sentence": t / len(HARVARD),
+        "first_call_seconds_in_a_new_process": t_cold,
+    }
 
 
 def bench_letter_to_sound(n_words: int = 2000):
@@ -106,11 +131,13 @@ def bench_letter_to_sound(n_words: int = 2000):
 
     from dam.speech import edit_distance, letter_to_sound
     from dam.speech.text import _cmudict, cmu_lookup
+
     words = sorted(w for w in _cmudict() if w.isalpha())
     sample = random.Random(0).sample(words, n_words)
 
     def strip(ps):
         return [re.sub(r"\d", "", p) for p in ps]
+
     errors = sum(min(edit_distance(strip(letter_to_sound(w)), strip(p)) for p in cmu_lookup(w)) for w in sample)
     exact = sum(any(strip(letter_to_sound(w)) == strip(p) for p in cmu_lookup(w)) for w in sample)
     total = sum(len(cmu_lookup(w)[0]) for w in sample)
@@ -119,8 +146,11 @@ def bench_letter_to_sound(n_words: int = 2000):
 
 def _cold_start():
     import subprocess
-    code = ("import time, warnings; t=time.perf_counter(); import dam; warnings.simplefilter('ignore');"
-            f"dam.animate(text={HARVARD[0]!r}); print(time.perf_counter()-t)")
+
+    code = (
+        "import time, warnings; t=time.perf_counter(); import dam; warnings.simplefilter('ignore');"
+        f"dam.animate(text={HARVARD[0]!r}); print(time.perf_counter()-t)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return float(out.stdout.strip())
 
@@ -128,21 +158,32 @@ def _cold_start():
 def _rmse_ms(model_pred, base_pred, true, mask=None):
     if mask is not None:
         model_pred, base_pred, true = model_pred[mask], base_pred[mask], true[mask]
-    return (1000 * float(np.sqrt(np.mean((model_pred - true) ** 2))),
-            1000 * float(np.sqrt(np.mean((base_pred - true) ** 2))), int(len(true)))
+    return (
+        1000 * float(np.sqrt(np.mean((model_pred - true) ** 2))),
+        1000 * float(np.sqrt(np.mean((base_pred - true) ** 2))),
+        int(len(true)),
+    )
 
 
 def _duration_row(name, train, test, word_ids_train=None, word_ids_test=None):
     model = DurationModel().fit(train, word_ids_train)
-    pred = np.concatenate([model.predict(list(a.labels), None if word_ids_test is None else word_ids_test[i])
-                           for i, a in enumerate(test)])
+    pred = np.concatenate(
+        [model.predict(list(a.labels), None if word_ids_test is None else word_ids_test[i]) for i, a in enumerate(test)]
+    )
     true = np.concatenate([a.ends - a.starts for a in test])
     base = phone_mean_baseline(train, test)
     speech = np.array([lab != a.silence for a in test for lab in a.labels])
     m_all, b_all, n_all = _rmse_ms(pred, base, true)
     m_sp, b_sp, n_sp = _rmse_ms(pred, base, true, speech)
-    return {"corpus": name, "segments": n_all, "rmse_ms": m_all, "baseline_rmse_ms": b_all,
-            "rmse_ms_phones_only": m_sp, "baseline_rmse_ms_phones_only": b_sp, "phones": n_sp}
+    return {
+        "corpus": name,
+        "segments": n_all,
+        "rmse_ms": m_all,
+        "baseline_rmse_ms": b_all,
+        "rmse_ms_phones_only": m_sp,
+        "baseline_rmse_ms_phones_only": b_sp,
+        "phones": n_sp,
+    }
 
 
 def _word_ids(result):
@@ -153,8 +194,11 @@ def _word_ids(result):
             out.append(-1)
             continue
         mid = (s + e) / 2
-        idx = [i for i, (w, ws, we) in enumerate(zip(result.words.labels, result.words.starts, result.words.ends))
-               if ws <= mid < we and w != "sil"]
+        idx = [
+            i
+            for i, (w, ws, we) in enumerate(zip(result.words.labels, result.words.starts, result.words.ends))
+            if ws <= mid < we and w != "sil"
+        ]
         out.append(idx[0] if idx else -1)
     return out
 
@@ -162,10 +206,14 @@ def _word_ids(result):
 def bench_durations(english):
     rows = []
     from dam.datasets.default_model import vtl_word_ids
+
     (vtl_train, wid_train), (vtl_test, wid_test) = vtl_word_ids("train"), vtl_word_ids("test")
     rows.append(_duration_row("vtl (train -> test)", vtl_train.alignments, vtl_test.alignments))
-    rows.append(_duration_row("vtl, with the recorded word boundaries", vtl_train.alignments,
-                              vtl_test.alignments, wid_train, wid_test))
+    rows.append(
+        _duration_row(
+            "vtl, with the recorded word boundaries", vtl_train.alignments, vtl_test.alignments, wid_train, wid_test
+        )
+    )
     tiny = dam.datasets.load("tiny").alignments
     cut = len(tiny) * 3 // 4
     rows.append(_duration_row("tiny (3/4 -> 1/4)", tiny[:cut], tiny[cut:]))
@@ -184,9 +232,17 @@ def bench_durations(english):
     pred, base, true, mask = map(np.concatenate, (preds, bases, trues, speech))
     m_all, b_all, n_all = _rmse_ms(pred, base, true)
     m_sp, b_sp, n_sp = _rmse_ms(pred, base, true, mask)
-    rows.append({"corpus": f"English alignments made here ({len(names)} utterances, leave one out)",
-                 "segments": n_all, "rmse_ms": m_all, "baseline_rmse_ms": b_all, "rmse_ms_phones_only": m_sp,
-                 "baseline_rmse_ms_phones_only": b_sp, "phones": n_sp})
+    rows.append(
+        {
+            "corpus": f"English alignments made here ({len(names)} utterances, leave one out)",
+            "segments": n_all,
+            "rmse_ms": m_all,
+            "baseline_rmse_ms": b_all,
+            "rmse_ms_phones_only": m_sp,
+            "baseline_rmse_ms_phones_only": b_sp,
+            "phones": n_sp,
+        }
+    )
     return rows
 
 
@@ -198,44 +254,71 @@ def main(argv=None):
     text = bench_text()
     durations = bench_durations(english)
     lts = bench_letter_to_sound()
-    res = {"machine": machine(), "load_average": os.getloadavg()[0], "alignment": align_rows,
-           "alignment_summary": align_summary, "text_to_trajectories": text, "durations": durations,
-           "letter_to_sound": lts}
+    res = {
+        "machine": machine(),
+        "load_average": os.getloadavg()[0],
+        "alignment": align_rows,
+        "alignment_summary": align_summary,
+        "text_to_trajectories": text,
+        "durations": durations,
+        "letter_to_sound": lts,
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "speech.json").write_text(json.dumps(res, indent=2) + "\n")
     s = align_summary
-    md = ["### Alignment (pocketsphinx 5, en-us) of the shipped test speech", "",
-          "| file | audio (s) | format | RTF cold | RTF warm | RTF phone recognition | median phone onset error (ms) |",
-          "|---|---|---|---|---|---|---|"]
+    md = [
+        "### Alignment (pocketsphinx 5, en-us) of the shipped test speech",
+        "",
+        "| file | audio (s) | format | RTF cold | RTF warm | RTF phone recognition | median phone onset error (ms) |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for r in align_rows:
         med = "-" if r["median_phone_onset_error_ms"] is None else f"{r['median_phone_onset_error_ms']:.0f}"
-        md.append(f"| {r['file']} | {r['seconds_audio']:.2f} | {r['rate_hz']} Hz {r['format']} | {r['rtf_cold']:.3f} "
-                  f"| {r['rtf_warm']:.3f} | {r['rtf_phone_recognition']:.3f} | {med} |")
-    md += ["", f"All files: median phone onset error {s['median_phone_onset_error_ms']:.0f} ms "
-               f"(90th percentile {s['p90_phone_onset_error_ms']:.0f} ms, {100 * s['share_within_50ms']:.0f}% "
-               f"within 50 ms, {s['phones_compared']} phones); median word onset error "
-               f"{s['median_word_onset_error_ms']:.0f} ms ({s['words_compared']} words). Phone recognition "
-               f"without a transcript: phone error rate {100 * s['phone_recognition_per']:.0f}% against the "
-               "forced alignment.", "",
-           "### Text to trajectories (default models, warm)", "",
-           f"{text['us_per_phone']:.0f} µs per phone end to end ({text['phones']} phones in {text['sentences']} "
-           f"Harvard sentences; {text['seconds_per_sentence'] * 1000:.1f} ms per sentence), of which DAM synthesis "
-           f"{text['us_per_phone_synthesis_only']:.0f} µs. First call in a new Python process (imports, "
-           f"dictionary, models): {text['first_call_seconds_in_a_new_process']:.2f} s.", "",
-           "### Phone durations: held-out RMSE (ms)", "",
-           "| corpus | segments | model | phone-mean baseline | phones only: model | phones only: baseline |",
-           "|---|---|---|---|---|---|"]
+        md.append(
+            f"| {r['file']} | {r['seconds_audio']:.2f} | {r['rate_hz']} Hz {r['format']} | {r['rtf_cold']:.3f} "
+            f"| {r['rtf_warm']:.3f} | {r['rtf_phone_recognition']:.3f} | {med} |"
+        )
+    md += [
+        "",
+        f"All files: median phone onset error {s['median_phone_onset_error_ms']:.0f} ms "
+        f"(90th percentile {s['p90_phone_onset_error_ms']:.0f} ms, {100 * s['share_within_50ms']:.0f}% "
+        f"within 50 ms, {s['phones_compared']} phones); median word onset error "
+        f"{s['median_word_onset_error_ms']:.0f} ms ({s['words_compared']} words). Phone recognition "
+        f"without a transcript: phone error rate {100 * s['phone_recognition_per']:.0f}% against the "
+        "forced alignment.",
+        "",
+        "### Text to trajectories (default models, warm)",
+        "",
+        f"{text['us_per_phone']:.0f} µs per phone end to end ({text['phones']} phones in {text['sentences']} "
+        f"Harvard sentences; {text['seconds_per_sentence'] * 1000:.1f} ms per sentence), of which DAM synthesis "
+        f"{text['us_per_phone_synthesis_only']:.0f} µs. First call in a new Python process (imports, "
+        f"dictionary, models): {text['first_call_seconds_in_a_new_process']:.2f} s.",
+        "",
+        "### Phone durations: held-out RMSE (ms)",
+        "",
+        "| corpus | segments | model | phone-mean baseline | phones only: model | phones only: baseline |",
+        "|---|---|---|---|---|---|",
+    ]
     for r in durations:
-        md.append(f"| {r['corpus']} | {r['segments']} | {r['rmse_ms']:.1f} | {r['baseline_rmse_ms']:.1f} | "
-                  f"{r['rmse_ms_phones_only']:.1f} | {r['baseline_rmse_ms_phones_only']:.1f} |")
-    md += ["", "### Letter-to-sound fallback", "",
-           f"Phone error rate {100 * lts['phone_error_rate']:.0f}%, words exactly right "
-           f"{100 * lts['word_accuracy']:.0f}%, on {lts['words']} random alphabetic CMU dictionary words "
-           "(names and loans included), against the dictionary."]
+        md.append(
+            f"| {r['corpus']} | {r['segments']} | {r['rmse_ms']:.1f} | {r['baseline_rmse_ms']:.1f} | "
+            f"{r['rmse_ms_phones_only']:.1f} | {r['baseline_rmse_ms_phones_only']:.1f} |"
+        )
+    md += [
+        "",
+        "### Letter-to-sound fallback",
+        "",
+        f"Phone error rate {100 * lts['phone_error_rate']:.0f}%, words exactly right "
+        f"{100 * lts['word_accuracy']:.0f}%, on {lts['words']} random alphabetic CMU dictionary words "
+        "(names and loans included), against the dictionary.",
+    ]
     m = res["machine"]
-    md += ["", f"Machine: {m['cpu']}, {m['cores']} cores, {m['date']}; load average while running "
-               f"{res['load_average']:.1f} (timings scale with it on a shared machine)"]
+    md += [
+        "",
+        f"Machine: {m['cpu']}, {m['cores']} cores, {m['date']}; load average while running "
+        f"{res['load_average']:.1f} (timings scale with it on a shared machine)",
+    ]
     text_md = "\n".join(md) + "\n"
     (out / "speech.md").write_text(text_md)
     print(text_md)

@@ -16,6 +16,7 @@ not the cost) with medians over repeats, and writes
 
     python benchmarks/bench_vtl.py [--repeat 3]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -53,14 +54,28 @@ def main(argv=None):
 
     # Two phrases of the same length: vowels, fricatives and /l/ only, and the
     # same with four of the segments turned into closures (m, t, k, b).
-    plain = [("", 0.15), ("a", 0.12), ("l", 0.08), ("a:", 0.15), ("z", 0.09), ("@", 0.08), ("f", 0.1),
-             ("i:", 0.14), ("l", 0.08), ("E", 0.1), ("S", 0.1), ("a", 0.14), ("", 0.15)]
+    plain = [
+        ("", 0.15),
+        ("a", 0.12),
+        ("l", 0.08),
+        ("a:", 0.15),
+        ("z", 0.09),
+        ("@", 0.08),
+        ("f", 0.1),
+        ("i:", 0.14),
+        ("l", 0.08),
+        ("E", 0.1),
+        ("S", 0.1),
+        ("a", 0.14),
+        ("", 0.15),
+    ]
     closed = list(plain)
     for k, sym in zip((2, 4, 6, 10), ("m", "t", "k", "b")):
         closed[k] = (sym, closed[k][1])
     n_closures = 4
     seconds = sum(d for _, d in plain)
     with tempfile.TemporaryDirectory() as tmp:
+
         def files(name, segs):
             seg, ges = os.path.join(tmp, f"{name}.seg"), os.path.join(tmp, f"{name}.ges")
             labels, durations = zip(*segs)
@@ -77,7 +92,9 @@ def main(argv=None):
         t_audio = cpu_median(lambda: vtl.gesture_file_to_audio(ges_c), max(1, args.repeat - 1))
     per_closure = (t_closed - t_plain) / n_closures
     res = {
-        "machine": machine(), "vtl": vtl.get_version(), "phrase_seconds": seconds,
+        "machine": machine(),
+        "vtl": vtl.get_version(),
+        "phrase_seconds": seconds,
         "gestural_score_without_closures_cpu_s": t_plain,
         "gestural_score_with_4_closures_cpu_s": t_closed,
         "cpu_s_per_closure": per_closure,
@@ -89,15 +106,17 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     (out / "vtl.json").write_text(json.dumps(res, indent=2) + "\n")
     m = res["machine"]
-    md = ("| step | CPU seconds (median) | ratio to the plain gestural score |\n|---|---|---|\n"
-          f"| gestural score, {seconds:.2f} s phrase without closures | {t_plain:.4f} | 1 |\n"
-          f"| each oral closure (p b t d k g m n N ts pf tS dZ) | {per_closure:.3f} | "
-          f"{res['closure_cost_ratio_to_plain_score'] or float('nan'):.0f} |\n"
-          f"| tract sequence, per second of speech | {t_tract / seconds:.4f} | "
-          f"{t_tract / seconds / t_plain if t_plain else float('nan'):.1f} |\n"
-          f"| audio, per second of speech | {t_audio / seconds:.2f} | "
-          f"{t_audio / seconds / t_plain if t_plain else float('nan'):.0f} |\n\n"
-          f"VTL {res['vtl']}. Machine: {m['cpu']}, {m['cores']} cores, {m['date']}.\n")
+    md = (
+        "| step | CPU seconds (median) | ratio to the plain gestural score |\n|---|---|---|\n"
+        f"| gestural score, {seconds:.2f} s phrase without closures | {t_plain:.4f} | 1 |\n"
+        f"| each oral closure (p b t d k g m n N ts pf tS dZ) | {per_closure:.3f} | "
+        f"{res['closure_cost_ratio_to_plain_score'] or float('nan'):.0f} |\n"
+        f"| tract sequence, per second of speech | {t_tract / seconds:.4f} | "
+        f"{t_tract / seconds / t_plain if t_plain else float('nan'):.1f} |\n"
+        f"| audio, per second of speech | {t_audio / seconds:.2f} | "
+        f"{t_audio / seconds / t_plain if t_plain else float('nan'):.0f} |\n\n"
+        f"VTL {res['vtl']}. Machine: {m['cpu']}, {m['cores']} cores, {m['date']}.\n"
+    )
     (out / "vtl.md").write_text(md)
     print(md)
 

@@ -14,6 +14,7 @@ benchmark::
 
 ``tests/test_readme.py`` runs the check, so a README that disagrees with its results files fails.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -41,16 +42,20 @@ def _p(p) -> str:
 
 
 def _compare_table(rows, best) -> list[str]:
-    out = ["| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | p vs best (Holm) |",
-           "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    out = [
+        "| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | p vs best (Holm) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for r in rows:
         if r["status"] != "ok":
             out.append(f"| {r['model']} | {r['status']}: {r['reason']} | | | | | | |")
             continue
         p = "best" if r["model"] == best else _p(r["wilcoxon_p_holm"])
-        out.append(f"| {r['model']} | {_g(r['rmse'])} | {_g(r['rmse_ci_low'])}–{_g(r['rmse_ci_high'])} | "
-                   f"{r['pearson_r']:.3f} | {r['fit_seconds']:.2f} | {r['predict_us_per_phone']:.1f} | "
-                   f"{r['frames_per_second']:.3g} | {p} |")
+        out.append(
+            f"| {r['model']} | {_g(r['rmse'])} | {_g(r['rmse_ci_low'])}–{_g(r['rmse_ci_high'])} | "
+            f"{r['pearson_r']:.3f} | {r['fit_seconds']:.2f} | {r['predict_us_per_phone']:.1f} | "
+            f"{r['frames_per_second']:.3g} | {p} |"
+        )
     return out
 
 
@@ -59,29 +64,40 @@ def render_demo() -> str:
     d = _load("compare_demo.json")
     m = d["machine"]
     n_test = max(r["n_utterances"] or 0 for r in d["summary"] if r["status"] == "ok")
-    lines = [f"What it prints (`benchmarks/results/compare_demo.md`, `python benchmarks/bench_compare.py demo`: "
-             f"{m['date']}, {m['cpu']}, {d['train_utterances']} training utterances ({d['train_minutes']} min), "
-             f"channels {', '.join(d['channels'])}). The run took {d['cpu_seconds']:.0f} CPU seconds, so about "
-             f"{d['two_idle_cores_seconds']:.0f} s on two idle cores (the tasks as joblib's two workers would "
-             f"share them); it was measured on a machine shared with other jobs (load average "
-             f"{d['load_average_start'][0]:.1f}), which is why the fit seconds below are longer:", ""]
+    lines = [
+        f"What it prints (`benchmarks/results/compare_demo.md`, `python benchmarks/bench_compare.py demo`: "
+        f"{m['date']}, {m['cpu']}, {d['train_utterances']} training utterances ({d['train_minutes']} min), "
+        f"channels {', '.join(d['channels'])}). The run took {d['cpu_seconds']:.0f} CPU seconds, so about "
+        f"{d['two_idle_cores_seconds']:.0f} s on two idle cores (the tasks as joblib's two workers would "
+        f"share them); it was measured on a machine shared with other jobs (load average "
+        f"{d['load_average_start'][0]:.1f}), which is why the fit seconds below are longer:",
+        "",
+    ]
     lines += _compare_table(d["summary"], d["best"])
     ok = [r for r in d["summary"] if r["status"] == "ok"]
     rank = {r["model"]: k for k, r in enumerate(ok, start=1)}
     said = f"Held out: the {n_test} test utterances of `vtl` (words never seen in training). Best: `{d['best']}`"
     if "dam" in rank and d["best"] != "dam":
         dam_row = next(r for r in ok if r["model"] == "dam")
-        said += (f"; the DAM ranks {rank['dam']} of {len(ok)} (Holm-corrected p = {_p(dam_row['wilcoxon_p_holm'])} "
-                 "against the best)")
+        said += (
+            f"; the DAM ranks {rank['dam']} of {len(ok)} (Holm-corrected p = {_p(dam_row['wilcoxon_p_holm'])} "
+            "against the best)"
+        )
     lines += ["", said + "."]
     return "\n".join(lines) + "\n"
 
 
 #: nn.json row -> how the README names it (the settings that differ from the defaults are said)
-NN_LABELS = {"lstm": "lstm (bidirectional)", "bi-gru-5L": "gru, 5 layers, bidirectional, hidden 32, ≤ 20 epochs",
-             "transformer": "transformer", "sliding-dnn": "sliding-dnn", "causal-mlp": "causal-mlp",
-             "gru": "gru (causal, 2 layers)", "gru-1L": "gru (causal, 1 layer)",
-             "sliding-dnn-linguistic": "sliding-dnn, linguistic features"}
+NN_LABELS = {
+    "lstm": "lstm (bidirectional)",
+    "bi-gru-5L": "gru, 5 layers, bidirectional, hidden 32, ≤ 20 epochs",
+    "transformer": "transformer",
+    "sliding-dnn": "sliding-dnn",
+    "causal-mlp": "causal-mlp",
+    "gru": "gru (causal, 2 layers)",
+    "gru-1L": "gru (causal, 1 layer)",
+    "sliding-dnn-linguistic": "sliding-dnn, linguistic features",
+}
 
 
 def render_all_models() -> str:
@@ -92,28 +108,53 @@ def render_all_models() -> str:
     for r in nn["rows"]:
         if r["model"] == "phone-mean":
             continue
-        rows.append((NN_LABELS.get(r["model"], r["model"]), r["rmse"], f"{r['pearson_r']:.3f}",
-                     f"{r['fit_seconds']:.0f}", f"{r['frames_per_second']:,.0f} frames/s", "nn.json"))
+        rows.append(
+            (
+                NN_LABELS.get(r["model"], r["model"]),
+                r["rmse"],
+                f"{r['pearson_r']:.3f}",
+                f"{r['fit_seconds']:.0f}",
+                f"{r['frames_per_second']:,.0f} frames/s",
+                "nn.json",
+            )
+        )
     classical = RESULTS / "compare_vtl_all.json"
     if classical.exists():
         c = _load("compare_vtl_all.json")
         for r in c["summary"]:
             if r["status"] == "ok":
-                rows.append((r["model"], r["rmse"], f"{r['pearson_r']:.3f}", f"{r['fit_seconds']:.0f}",
-                             f"{r['predict_us_per_phone']:.0f} µs/phone", "compare_vtl_all.json"))
+                rows.append(
+                    (
+                        r["model"],
+                        r["rmse"],
+                        f"{r['pearson_r']:.3f}",
+                        f"{r['fit_seconds']:.0f}",
+                        f"{r['predict_us_per_phone']:.0f} µs/phone",
+                        "compare_vtl_all.json",
+                    )
+                )
     else:
         acc = _load("dam_accuracy_vtl.json")["models"]
         for key in ("phone-mean", "dam", "dam-m0"):
             r = acc[key]
-            rows.append((key, r["rmse"], f"{r['pearson_r']:.3f}", f"{r['fit_seconds']:.0f}", "",
-                         "dam_accuracy_vtl.json"))
+            rows.append(
+                (key, r["rmse"], f"{r['pearson_r']:.3f}", f"{r['fit_seconds']:.0f}", "", "dam_accuracy_vtl.json")
+            )
     hmm_dv = RESULTS / "hmm_dv.json"  # benchmarks/bench_hmm_dv.py: the HMM and dynamic-viseme rows
     if hmm_dv.exists():
         seen = {r[0] for r in rows}
         for r in _load("hmm_dv.json")["rows"]:
             if r["model"] in ("hmm", "dynamic-visemes") and r["model"] not in seen:
-                rows.append((r["model"], r["rmse"], f"{r['pearson_r']:.3f}", f"{r['fit_seconds']:.0f}",
-                             f"{r['us_per_phone']:.0f} µs/phone", "hmm_dv.json"))
+                rows.append(
+                    (
+                        r["model"],
+                        r["rmse"],
+                        f"{r['pearson_r']:.3f}",
+                        f"{r['fit_seconds']:.0f}",
+                        f"{r['us_per_phone']:.0f} µs/phone",
+                        "hmm_dv.json",
+                    )
+                )
     rows.sort(key=lambda r: r[1])
     best = rows[0][1]
     lines = ["| model | RMSE | Pearson r | fit s | synthesis | source |", "|---|---:|---:|---:|---:|---|"]
@@ -128,22 +169,28 @@ def render_crossmap() -> str:
     d = _load("crossmap_pipeline.json")
     runs = d["runs"]
     main = runs[-1]
-    lines = [f"`python examples/crossmap_pipeline.py` goes the whole way (outlines → "
-             f"{main['key_shapes']} key shapes → NNLS weights (outline RMSE {main['blend_rmse_cm']:.3f} cm "
-             f"against a {main['captured']['outline_sd_cm']:.2f} cm spread) → controls bounded in [0, 1] "
-             f"(vertex fit {main['controls']['vertex_fit_rmse']:.3f}) → DAM → held-out synthesis → retargeting "
-             f"to a second character; {main['seconds']:.0f} s on this shared machine). Held-out RMSE of the "
-             f"synthesized controls (clipped to the rig's "
-             f"[0, 1]) on {main['held_out']['utterances']} test phrases, by minutes of training phrases "
-             f"(`benchmarks/results/crossmap_pipeline.md`, {d['machine']['date']}):", "",
-             "| training | phrases | " + " | ".join(main["held_out"]["scores"])
-             + f" | {main['model']} values outside [0, 1] before clipping |",
-             "|---:|---:|" + "---:|" * (len(main["held_out"]["scores"]) + 1)]
+    lines = [
+        f"`python examples/crossmap_pipeline.py` goes the whole way (outlines → "
+        f"{main['key_shapes']} key shapes → NNLS weights (outline RMSE {main['blend_rmse_cm']:.3f} cm "
+        f"against a {main['captured']['outline_sd_cm']:.2f} cm spread) → controls bounded in [0, 1] "
+        f"(vertex fit {main['controls']['vertex_fit_rmse']:.3f}) → DAM → held-out synthesis → retargeting "
+        f"to a second character; {main['seconds']:.0f} s on this shared machine). Held-out RMSE of the "
+        f"synthesized controls (clipped to the rig's "
+        f"[0, 1]) on {main['held_out']['utterances']} test phrases, by minutes of training phrases "
+        f"(`benchmarks/results/crossmap_pipeline.md`, {d['machine']['date']}):",
+        "",
+        "| training | phrases | "
+        + " | ".join(main["held_out"]["scores"])
+        + f" | {main['model']} values outside [0, 1] before clipping |",
+        "|---:|---:|" + "---:|" * (len(main["held_out"]["scores"]) + 1),
+    ]
     for run in runs:
         sc = run["held_out"]["scores"]
-        lines.append(f"| {run['minutes']:g} min | {run['captured']['train_utterances']} | "
-                     + " | ".join(f"{sc[m]['rmse']:.3f}" for m in main["held_out"]["scores"])
-                     + f" | {100 * sc[run['model']]['outside_0_1_share']:.0f}% |")
+        lines.append(
+            f"| {run['minutes']:g} min | {run['captured']['train_utterances']} | "
+            + " | ".join(f"{sc[m]['rmse']:.3f}" for m in main["held_out"]["scores"])
+            + f" | {100 * sc[run['model']]['outside_0_1_share']:.0f}% |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -152,16 +199,21 @@ def render_hmm_dv() -> str:
     (benchmarks/bench_hmm_dv.py)."""
     d = _load("hmm_dv.json")
     m = d["machine"]
-    lines = [f"Held-out `vtl:test`, all {len(d['channels'])} channels (`benchmarks/results/hmm_dv.md`, {m['date']}, "
-             f"{m['cpu']}, shared with other jobs: fit and synthesis times are upper bounds):", "",
-             "| model | input span (s) | fit (s) | synthesis (µs/phone) | RMSE | r |",
-             "|---|---:|---:|---:|---:|---:|"]
+    lines = [
+        f"Held-out `vtl:test`, all {len(d['channels'])} channels (`benchmarks/results/hmm_dv.md`, {m['date']}, "
+        f"{m['cpu']}, shared with other jobs: fit and synthesis times are upper bounds):",
+        "",
+        "| model | input span (s) | fit (s) | synthesis (µs/phone) | RMSE | r |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
     rows = sorted(d["rows"], key=lambda r: r["rmse"])
     for r in rows:
         span = f"{r['input_span_seconds']:.2f}" if "input_span_seconds" in r else ""
         rmse = f"**{r['rmse']:.3f}**" if r is rows[0] else f"{r['rmse']:.3f}"
-        lines.append(f"| {r['model']} | {span} | {r['fit_seconds']:.1f} | {r['us_per_phone']:.0f} | {rmse} | "
-                     f"{r['pearson_r']:.3f} |")
+        lines.append(
+            f"| {r['model']} | {span} | {r['fit_seconds']:.1f} | {r['us_per_phone']:.0f} | {rmse} | "
+            f"{r['pearson_r']:.3f} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -169,9 +221,12 @@ def render_taylor() -> str:
     """Taylor et al. (2017)'s comparison, from results/compare_taylor.json (benchmarks/bench_compare.py taylor)."""
     d = _load("compare_taylor.json")
     m = d["machine"]
-    lines = [f"`benchmarks/results/compare_taylor.md` ({m['date']}, {m['cpu']}, channels {', '.join(d['channels'])}, "
-             f"{d['train_utterances']} training utterances; load average {d['load_average_start'][0]:.1f} at the "
-             f"start, so times are upper bounds):", ""]
+    lines = [
+        f"`benchmarks/results/compare_taylor.md` ({m['date']}, {m['cpu']}, channels {', '.join(d['channels'])}, "
+        f"{d['train_utterances']} training utterances; load average {d['load_average_start'][0]:.1f} at the "
+        f"start, so times are upper bounds):",
+        "",
+    ]
     lines += _compare_table(d["summary"], d["best"])
     return "\n".join(lines) + "\n"
 
@@ -179,6 +234,7 @@ def render_taylor() -> str:
 def render_audio_models() -> str:
     """Audio- beside phone-driven rows on vtl, from results/audio_models.json (bench_audio_models.py)."""
     import importlib.util
+
     path = ROOT / "benchmarks" / "bench_audio_models.py"
     spec = importlib.util.spec_from_file_location("bench_audio_models", path)
     mod = importlib.util.module_from_spec(spec)
@@ -190,8 +246,14 @@ def render_audio_models() -> str:
     return mod.markdown(_load("audio_models.json"))
 
 
-BLOCKS = {"demo": render_demo, "all-models": render_all_models, "crossmap": render_crossmap,
-          "hmm-dv": render_hmm_dv, "taylor": render_taylor, "audio-models": render_audio_models}
+BLOCKS = {
+    "demo": render_demo,
+    "all-models": render_all_models,
+    "crossmap": render_crossmap,
+    "hmm-dv": render_hmm_dv,
+    "taylor": render_taylor,
+    "audio-models": render_audio_models,
+}
 
 
 def render(name: str) -> str:
@@ -209,8 +271,7 @@ def update(text: str) -> tuple[str, list[str]]:
         try:
             body = render(m.group("name"))
         except FileNotFoundError as exc:  # its results file is not there: the block cannot be right
-            print(f"README.md: block {m.group('name')!r}: {exc.filename} missing; run its benchmark",
-                  file=sys.stderr)
+            print(f"README.md: block {m.group('name')!r}: {exc.filename} missing; run its benchmark", file=sys.stderr)
             changed.append(m.group("name"))
             return m.group(0)
         if body != m.group("body"):
@@ -228,12 +289,15 @@ def main(argv=None) -> int:
     new, changed = update(text)
     if args.check:
         if changed:
-            print(f"README.md: stale generated blocks: {', '.join(changed)} (run benchmarks/update_readme.py)",
-                  file=sys.stderr)
+            print(
+                f"README.md: stale generated blocks: {', '.join(changed)} (run benchmarks/update_readme.py)",
+                file=sys.stderr,
+            )
             return 1
         return 0
     if new != text:
         from dam.corpus.atomic import atomic_write
+
         with atomic_write(README) as fh:
             fh.write(new)
     _, left = update(new)  # what is still not right: blocks whose results file is missing

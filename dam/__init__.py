@@ -20,13 +20,23 @@ Examples
 >>> model.predict(train[0].alignment).shape == train[0].trajectory.shape
 True
 """
+
 from __future__ import annotations
 
 from dam import _compat
 from dam._lazy import lazy_exports
 from dam._version import __version__
-from dam.base import (ConvergenceWarning, Interval, InvalidParameterError, NotFittedError, Options, Synthesizer,
-                      TupleOf, UnknownPhoneError, clone)
+from dam.base import (
+    ConvergenceWarning,
+    Interval,
+    InvalidParameterError,
+    NotFittedError,
+    Options,
+    Synthesizer,
+    TupleOf,
+    UnknownPhoneError,
+    clone,
+)
 from dam.corpus.data import SILENCE, Alignment, Corpus, DataError, Utterance
 from dam.modelfile import ModelFileError, StateArray, StateCounts, StateNames, load
 from dam.registry import make, register
@@ -39,11 +49,45 @@ _EXPORTS = {
     "compare": "dam.evaluation.compare",
     **dict.fromkeys(["align", "text_to_phones", "animate"], "dam.speech"),
 }
-_SUBMODULES = ("corpus", "model", "evaluation", "crossmap", "datasets", "testing", "registry", "base",
-               "modelfile", "speech", "progress", "plotting", "export")
+_SUBMODULES = (
+    "corpus",
+    "model",
+    "evaluation",
+    "crossmap",
+    "datasets",
+    "testing",
+    "registry",
+    "base",
+    "modelfile",
+    "speech",
+    "progress",
+    "plotting",
+    "export",
+)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
-__all__ = ["Alignment", "Utterance", "Corpus", "Synthesizer", "DataError", "NotFittedError",
-           "ModelFileError", "UnknownPhoneError", "ConvergenceWarning", "InvalidParameterError",
-           "Interval", "Options", "TupleOf", "StateArray", "StateNames", "StateCounts", "SILENCE", "clone", "load", "make",
-           "register", "__version__", *_EXPORTS]
+__all__ = [
+    "Alignment",
+    "Utterance",
+    "Corpus",
+    "Synthesizer",
+    "DataError",
+    "NotFittedError",
+    "ModelFileError",
+    "UnknownPhoneError",
+    "ConvergenceWarning",
+    "InvalidParameterError",
+    "Interval",
+    "Options",
+    "TupleOf",
+    "StateArray",
+    "StateNames",
+    "StateCounts",
+    "SILENCE",
+    "clone",
+    "load",
+    "make",
+    "register",
+    "__version__",
+    *_EXPORTS,
+]

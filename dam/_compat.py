@@ -3,6 +3,7 @@
 ``import dam.data`` (and the rest below) returns the module at its new place and warns
 once. Remove in 0.3.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -12,11 +13,17 @@ import sys
 import warnings
 
 MOVED = {
-    "dam.data": "dam.corpus.data", "dam.io": "dam.corpus.io", "dam.est": "dam.corpus.formats.est",
-    "dam.phonetics": "dam.corpus.phonetics", "dam.features": "dam.corpus.features",
-    **{f"dam.{m}": f"dam.model.{m}"
-       for m in ("dominance", "animeme", "astar", "em", "estep", "mstep", "modes", "synthesis")},
-    "dam.metrics": "dam.evaluation.metrics", "dam.compare": "dam.evaluation.compare",
+    "dam.data": "dam.corpus.data",
+    "dam.io": "dam.corpus.io",
+    "dam.est": "dam.corpus.formats.est",
+    "dam.phonetics": "dam.corpus.phonetics",
+    "dam.features": "dam.corpus.features",
+    **{
+        f"dam.{m}": f"dam.model.{m}"
+        for m in ("dominance", "animeme", "astar", "em", "estep", "mstep", "modes", "synthesis")
+    },
+    "dam.metrics": "dam.evaluation.metrics",
+    "dam.compare": "dam.evaluation.compare",
     **{f"dam.{m}": f"dam.crossmap.{m}" for m in ("rig", "retarget", "landmarks", "outlines")},
     "dam.cli_rig": "dam.cli.rig",
 }
@@ -30,8 +37,9 @@ class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 
     def create_module(self, spec):
         new = MOVED[spec.name]
-        warnings.warn(f"{spec.name} moved to {new}; the old path goes away in dam 0.3",
-                      DeprecationWarning, stacklevel=3)
+        warnings.warn(
+            f"{spec.name} moved to {new}; the old path goes away in dam 0.3", DeprecationWarning, stacklevel=3
+        )
         return importlib.import_module(new)
 
     def exec_module(self, module):

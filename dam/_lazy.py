@@ -3,6 +3,7 @@
 Keeps ``import dam`` (and ``import dam.corpus``) light: scipy, praatio, scikit-learn and
 matplotlib are imported only by the piece that needs them.
 """
+
 from __future__ import annotations
 
 import importlib

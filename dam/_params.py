@@ -31,6 +31,7 @@ Traceback (most recent call last):
 ...
 dam._params.InvalidParameterError: DAM: parameter 'degree' is True; it must be an int in [0, inf)
 """
+
 from __future__ import annotations
 
 import math
@@ -38,8 +39,16 @@ import numbers
 
 import numpy as np
 
-__all__ = ["InvalidParameterError", "Constraint", "Interval", "Options", "TupleOf", "make_constraint",
-           "validate_params", "invalid_values"]
+__all__ = [
+    "InvalidParameterError",
+    "Constraint",
+    "Interval",
+    "Options",
+    "TupleOf",
+    "make_constraint",
+    "validate_params",
+    "invalid_values",
+]
 
 _CLOSED = {"both": "[]", "left": "[)", "right": "(]", "neither": "()"}
 
@@ -142,8 +151,10 @@ class Interval(Constraint):
     def invalid_values(self) -> dict[str, list]:
         wrong = ["abc", True, None] + ([1.5] if self.kind is int else [float("nan"), float("inf")])
         out = []
-        for bound, inside, step in ((self.left, self.closed in ("both", "left"), -1),
-                                    (self.right, self.closed in ("both", "right"), +1)):
+        for bound, inside, step in (
+            (self.left, self.closed in ("both", "left"), -1),
+            (self.right, self.closed in ("both", "right"), +1),
+        ):
             if bound is None:
                 continue
             if self.kind is int:
@@ -182,7 +193,8 @@ class Options(Constraint):
             return any(_is_bool(o) and o == value for o in self._options)
         try:
             return any(type(value) is type(o) and value == o for o in self._options) or (
-                isinstance(value, str) and value in [o for o in self._options if isinstance(o, str)])
+                isinstance(value, str) and value in [o for o in self._options if isinstance(o, str)]
+            )
         except TypeError:
             return False
 
@@ -192,8 +204,10 @@ class Options(Constraint):
 
     def invalid_values(self) -> dict[str, list]:
         strs = all(isinstance(o, str) for o in self._options)
-        return {"wrong type": [1.5, ["x"]] if strs else ["abc"],
-                "out of range": ["zz-not-an-option"] if strs else [-987654]}
+        return {
+            "wrong type": [1.5, ["x"]] if strs else ["abc"],
+            "out of range": ["zz-not-an-option"] if strs else [-987654],
+        }
 
 
 class TupleOf(Constraint):
@@ -282,8 +296,9 @@ class _Boolean(Constraint):
 
 class _RandomState(Constraint):
     def is_satisfied_by(self, value) -> bool:
-        return value is None or (isinstance(value, (int, np.integer)) and not _is_bool(value)
-                                 and 0 <= value <= 2**32 - 1)
+        return value is None or (
+            isinstance(value, (int, np.integer)) and not _is_bool(value) and 0 <= value <= 2**32 - 1
+        )
 
     def __str__(self) -> str:
         return "None or an int seed in [0, 4294967295]"
@@ -342,8 +357,9 @@ def make_constraint(spec) -> Constraint:
         return _NoneConstraint()
     if isinstance(spec, str):
         if spec not in _NAMED:
-            raise ValueError(f"unknown constraint {spec!r}; use one of {sorted(_NAMED)}, None, a class, "
-                             "Interval, Options or TupleOf")
+            raise ValueError(
+                f"unknown constraint {spec!r}; use one of {sorted(_NAMED)}, None, a class, Interval, Options or TupleOf"
+            )
         return _NAMED[spec]()
     if isinstance(spec, type):
         return _InstanceOf(spec)

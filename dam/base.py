@@ -10,6 +10,7 @@ Subclasses implement ``_fit(corpus)`` and ``_predict(alignment, n_frames)``;
 the base class does the validation and the bookkeeping, and
 :mod:`dam.modelfile` the file format.
 """
+
 from __future__ import annotations
 
 import copy
@@ -25,10 +26,26 @@ from dam.modelfile import ModelFileError, StateCounts, StateNames, load, write_m
 
 #: One prediction holds at most this many values (2 GiB of float64; a day at 100 Hz with
 #: 300 channels): larger is refused before anything is allocated (issue 12).
-MAX_PREDICTION_VALUES = 2 ** 28
+MAX_PREDICTION_VALUES = 2**28
 
-__all__ = ["Estimator", "Synthesizer", "Transformer", "NotFittedError", "ModelFileError", "UnknownPhoneError", "ConvergenceWarning",
-           "InvalidParameterError", "Interval", "Options", "TupleOf", "Tag", "TAGS", "clone", "load", "predict_inputs"]
+__all__ = [
+    "Estimator",
+    "Synthesizer",
+    "Transformer",
+    "NotFittedError",
+    "ModelFileError",
+    "UnknownPhoneError",
+    "ConvergenceWarning",
+    "InvalidParameterError",
+    "Interval",
+    "Options",
+    "TupleOf",
+    "Tag",
+    "TAGS",
+    "clone",
+    "load",
+    "predict_inputs",
+]
 
 
 class NotFittedError(RuntimeError, AttributeError):
@@ -73,24 +90,49 @@ class Tag:
         if ok and self.type is tuple:
             ok = all(isinstance(v, str) and (self.values is None or v in self.values) for v in value)
         if not ok:
-            allowed = f"a tuple of {', '.join(map(repr, self.values))}" if self.values else \
-                ("a tuple of str" if self.type is tuple else "True or False")
+            allowed = (
+                f"a tuple of {', '.join(map(repr, self.values))}"
+                if self.values
+                else ("a tuple of str" if self.type is tuple else "True or False")
+            )
             raise TypeError(f"{owner}: tag {self.name!r} is {value!r}; it must be {allowed}")
 
 
 #: Every tag a synthesizer may set in its ``_tags`` (unknown names are an error).
-TAGS: dict[str, Tag] = {t.name: t for t in (
-    Tag("requires", tuple, (), "optional extras of dam the model needs to fit and predict, e.g. ('jax',) "
-        "(`pip install \"dam[jax]\"`); a model whose extra is missing is skipped by `dam compare`"),
-    Tag("reads", tuple, ("phones",), "what predict reads: phone timings, and audio", values=("phones", "audio")),
-    Tag("deterministic", bool, True, "the same data and parameters (random_state included) give the same model: "
-        "check_refit_idempotent asks it; otherwise check_same_seed_same_model"),
-    Tag("slow", bool, False, "fitting takes seconds even with get_test_params (the neural models)"),
-    Tag("reference", bool, False, "a reference the others are measured against: check_beats_phone_mean "
-        "does not apply"),
-    Tag("numpy_runtime", bool, False, "a saved model loads and predicts with numpy alone (no scipy, "
-        "scikit-learn or jax): check_numpy_runtime asks it"),
-)}
+TAGS: dict[str, Tag] = {
+    t.name: t
+    for t in (
+        Tag(
+            "requires",
+            tuple,
+            (),
+            "optional extras of dam the model needs to fit and predict, e.g. ('jax',) "
+            '(`pip install "dam[jax]"`); a model whose extra is missing is skipped by `dam compare`',
+        ),
+        Tag("reads", tuple, ("phones",), "what predict reads: phone timings, and audio", values=("phones", "audio")),
+        Tag(
+            "deterministic",
+            bool,
+            True,
+            "the same data and parameters (random_state included) give the same model: "
+            "check_refit_idempotent asks it; otherwise check_same_seed_same_model",
+        ),
+        Tag("slow", bool, False, "fitting takes seconds even with get_test_params (the neural models)"),
+        Tag(
+            "reference",
+            bool,
+            False,
+            "a reference the others are measured against: check_beats_phone_mean does not apply",
+        ),
+        Tag(
+            "numpy_runtime",
+            bool,
+            False,
+            "a saved model loads and predicts with numpy alone (no scipy, "
+            "scikit-learn or jax): check_numpy_runtime asks it",
+        ),
+    )
+}
 
 
 class Estimator:
@@ -141,12 +183,13 @@ class Estimator:
         """Hyperparameters as a dict (``deep`` is accepted for compatibility)."""
         return {k: getattr(self, k) for k in self._param_names()}
 
-    def set_params(self, **params) -> "Estimator":
+    def set_params(self, **params) -> Estimator:
         valid = set(self._param_names())
         for k, v in params.items():
             if k not in valid:
-                raise ValueError(f"{type(self).__name__}: unknown parameter {k!r}; "
-                                 f"valid parameters are {sorted(valid)}")
+                raise ValueError(
+                    f"{type(self).__name__}: unknown parameter {k!r}; valid parameters are {sorted(valid)}"
+                )
             setattr(self, k, v)
         return self
 
@@ -183,6 +226,7 @@ class Estimator:
     def _check_param_relations(self) -> None:
         """Check rules that tie parameters together (override; each parameter alone is
         declared in ``_parameter_constraints``). Raise :class:`InvalidParameterError`."""
+
 
 class Synthesizer(Estimator):
     """Base class for all synthesizers.
@@ -259,8 +303,9 @@ class Synthesizer(Estimator):
         for klass in reversed(cls.__mro__):
             for k, v in (klass.__dict__.get("_tags") or {}).items():
                 if k not in TAGS:
-                    raise TypeError(f"{klass.__name__}: unknown tag {k!r}; the tags are {', '.join(TAGS)} "
-                                    "(dam.base.TAGS)")
+                    raise TypeError(
+                        f"{klass.__name__}: unknown tag {k!r}; the tags are {', '.join(TAGS)} (dam.base.TAGS)"
+                    )
                 TAGS[k].check(klass.__name__, v)
                 tags[k] = v
         return tags
@@ -271,7 +316,7 @@ class Synthesizer(Estimator):
         return [{}, {}]
 
     # -- fitting -----------------------------------------------------------
-    def fit(self, corpus: Corpus) -> "Synthesizer":
+    def fit(self, corpus: Corpus) -> Synthesizer:
         """Learn from ``corpus`` and return ``self``.
 
         Missing data: where ``Utterance.mask`` marks a value as not observed,
@@ -285,8 +330,10 @@ class Synthesizer(Estimator):
         by the mask, while its mode clustering sees the interpolated values).
         """
         if not isinstance(corpus, Corpus):
-            raise TypeError(f"{type(self).__name__}.fit expects a dam.Corpus, got {type(corpus).__name__}"
-                            "; build one with dam.Corpus([...]) or dam.load_corpus(path)")
+            raise TypeError(
+                f"{type(self).__name__}.fit expects a dam.Corpus, got {type(corpus).__name__}"
+                "; build one with dam.Corpus([...]) or dam.load_corpus(path)"
+            )
         self._validate_params()
         self._forget_learned()
         self.frame_rate_ = corpus.frame_rate
@@ -358,14 +405,19 @@ class Synthesizer(Estimator):
         """Refuse, before allocating, a prediction of more than :data:`MAX_PREDICTION_VALUES` values."""
         size = n_frames * len(self.channels_)
         if size > MAX_PREDICTION_VALUES:
-            raise DataError(getattr(alignment, "source", None), "duration", f"{alignment.duration:g} s",
-                            f"{n_frames} frames x {len(self.channels_)} channels at {self.frame_rate_:g} Hz "
-                            f"exceed the {MAX_PREDICTION_VALUES} values one prediction may hold",
-                            "split the alignment into utterances")
+            raise DataError(
+                getattr(alignment, "source", None),
+                "duration",
+                f"{alignment.duration:g} s",
+                f"{n_frames} frames x {len(self.channels_)} channels at {self.frame_rate_:g} Hz "
+                f"exceed the {MAX_PREDICTION_VALUES} values one prediction may hold",
+                "split the alignment into utterances",
+            )
 
     def _predict_one(self, alignment) -> np.ndarray:
         from dam.corpus.data import Utterance
         from dam.corpus.formats.audio import AudioClip
+
         audio = "audio" in self.reads()
         if isinstance(alignment, Utterance) and not audio:
             alignment = alignment.alignment  # a phone-driven model reads the utterance's alignment
@@ -379,9 +431,11 @@ class Synthesizer(Estimator):
             self._check_output_size(timing, n)
             out = np.asarray(self._predict_audio(alignment, n), dtype=float)
         else:
-            raise TypeError(f"{type(self).__name__}.predict expects a dam.Alignment, a dam.Utterance"
-                            f"{' or a dam.corpus.AudioClip' if audio else ''} (or a list of them), "
-                            f"got {type(alignment).__name__}")
+            raise TypeError(
+                f"{type(self).__name__}.predict expects a dam.Alignment, a dam.Utterance"
+                f"{' or a dam.corpus.AudioClip' if audio else ''} (or a list of them), "
+                f"got {type(alignment).__name__}"
+            )
         if out.shape != (n, len(self.channels_)):
             raise RuntimeError(f"{type(self).__name__} produced shape {out.shape}, expected {(n, len(self.channels_))}")
         if not np.all(np.isfinite(out)):
@@ -418,21 +472,28 @@ class Synthesizer(Estimator):
             sub = None
             if unknown_phone == "fallback":
                 from dam.corpus.phonetics import fallback_phone
+
                 sub = fallback_phone(lab, counts, alignment.silence)
             elif unknown_phone != "error":
-                raise ValueError(f"{type(self).__name__}: parameter 'unknown_phone' is {unknown_phone!r}; "
-                                 "use 'error' or 'fallback'")
+                raise ValueError(
+                    f"{type(self).__name__}: parameter 'unknown_phone' is {unknown_phone!r}; use 'error' or 'fallback'"
+                )
             if sub is None:
-                raise UnknownPhoneError(alignment.source, f"segment {i} label", lab,
-                                        "phone not seen in training",
-                                        f"known phones: {' '.join(counts)}; pass unknown_phone='fallback' "
-                                        "to substitute a phone of the same class")
+                raise UnknownPhoneError(
+                    alignment.source,
+                    f"segment {i} label",
+                    lab,
+                    "phone not seen in training",
+                    f"known phones: {' '.join(counts)}; pass unknown_phone='fallback' "
+                    "to substitute a phone of the same class",
+                )
             out.append(sub)
         return out
 
     def score(self, corpus: Corpus) -> float:
         """Negative overall RMSE on ``corpus`` (higher is better, as scikit-learn scorers)."""
         from dam.evaluation.metrics import evaluate
+
         return -evaluate(self, corpus).rmse
 
     # -- persistence -------------------------------------------------------
@@ -450,7 +511,7 @@ class Synthesizer(Estimator):
         write_model_file(self, path)
 
     @classmethod
-    def load(cls, path) -> "Synthesizer":
+    def load(cls, path) -> Synthesizer:
         model = load(path)
         if not isinstance(model, cls):
             raise ModelFileError(f"{path}: holds a {type(model).__name__}, not a {cls.__name__}")
@@ -465,7 +526,7 @@ class Transformer(Estimator):
     and pipelines work on both.
     """
 
-    def fit(self, X, y=None) -> "Transformer":  # pragma: no cover - abstract
+    def fit(self, X, y=None) -> Transformer:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def transform(self, X):  # pragma: no cover - abstract
@@ -505,18 +566,23 @@ def _apply_preset(cls: type, preset: dict) -> None:
     sig = inspect.signature(parent_init)
     unknown = sorted(set(preset) - set(sig.parameters) - {"self"})
     if unknown:
-        raise TypeError(f"{cls.__name__}: _preset names {unknown}, which are not parameters of "
-                        f"{cls.__mro__[1].__name__}")
+        raise TypeError(
+            f"{cls.__name__}: _preset names {unknown}, which are not parameters of {cls.__mro__[1].__name__}"
+        )
 
     def __init__(self, **params):
         parent_init(self, **{**preset, **params})
 
-    __init__.__signature__ = sig.replace(parameters=[p.replace(default=preset[p.name]) if p.name in preset else p
-                                                     for p in sig.parameters.values()])
+    __init__.__signature__ = sig.replace(
+        parameters=[p.replace(default=preset[p.name]) if p.name in preset else p for p in sig.parameters.values()]
+    )
     __init__.__qualname__ = f"{cls.__qualname__}.__init__"
     __init__.__module__ = cls.__module__
-    __init__.__doc__ = (f"Parameters as :class:`{cls.__mro__[1].__name__}`, with the defaults "
-                        + ", ".join(f"{k}={v!r}" for k, v in preset.items()) + ".")
+    __init__.__doc__ = (
+        f"Parameters as :class:`{cls.__mro__[1].__name__}`, with the defaults "
+        + ", ".join(f"{k}={v!r}" for k, v in preset.items())
+        + "."
+    )
     cls.__init__ = __init__
 
 
@@ -525,5 +591,3 @@ def _same(a, b) -> bool:
         return bool(a == b) if not isinstance(a, np.ndarray) else False
     except Exception:
         return False
-
-

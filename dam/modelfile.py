@@ -30,6 +30,7 @@ across entries, finite values, ranges. The same check runs before writing, so a
 file written by dam always loads. Files are written atomically
 (:mod:`dam.corpus.atomic`).
 """
+
 from __future__ import annotations
 
 import json
@@ -46,8 +47,20 @@ FORMAT = "dam-model"
 FORMAT_VERSION = 1
 META_KEY = "__dam__"
 
-__all__ = ["ModelFileError", "FORMAT", "FORMAT_VERSION", "read_model_file", "write_model_file", "load",
-           "StateArray", "StateNames", "StateCounts", "StateRanges", "check_state", "state_schema"]
+__all__ = [
+    "ModelFileError",
+    "FORMAT",
+    "FORMAT_VERSION",
+    "read_model_file",
+    "write_model_file",
+    "load",
+    "StateArray",
+    "StateNames",
+    "StateCounts",
+    "StateRanges",
+    "check_state",
+    "state_schema",
+]
 
 
 class ModelFileError(ValueError):
@@ -64,17 +77,23 @@ def write_model_file(model, path) -> None:
         infinity (nothing is written; an existing file at ``path`` is kept).
     """
     arrays: dict[str, np.ndarray] = {}
-    meta = {"format": FORMAT, "version": FORMAT_VERSION, "model": model_name(model),
-            "class": f"{type(model).__module__}.{type(model).__qualname__}",
-            "dam_version": __version__, "params": _encode(model.get_params(), arrays),
-            "state": _encode(model._get_state(), arrays)}
+    meta = {
+        "format": FORMAT,
+        "version": FORMAT_VERSION,
+        "model": model_name(model),
+        "class": f"{type(model).__module__}.{type(model).__qualname__}",
+        "dam_version": __version__,
+        "params": _encode(model.get_params(), arrays),
+        "state": _encode(model._get_state(), arrays),
+    }
     path = os.fspath(path)
     try:
         text = json.dumps(meta, allow_nan=False)
     except ValueError:
         bad = [k for k, v in {**meta["params"], **meta["state"]}.items() if not _json_finite(v)]
-        raise ModelFileError(f"{path}: field {bad[0] if bad else 'params'!r} is NaN or infinite; "
-                             "a model file holds finite numbers only") from None
+        raise ModelFileError(
+            f"{path}: field {bad[0] if bad else 'params'!r} is NaN or infinite; a model file holds finite numbers only"
+        ) from None
     arrays[META_KEY] = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
     # What load() would refuse is never written: a model file on disk always loads.
     check_state(type(model), _decode(meta["state"], arrays), path)
@@ -95,6 +114,7 @@ def model_name(model) -> str:
     (``dam.register("smooth-pm", SmoothPhoneMean)`` gives ``"smooth-pm"``), else its ``name``
     attribute, else the class name."""
     from dam.registry import get, registered_name
+
     own = getattr(model, "name", "") or ""
     try:
         if own and get(own) is type(model):
@@ -106,8 +126,9 @@ def model_name(model) -> str:
 
 def _encode(obj: Any, arrays: dict) -> Any:
     """JSON-able form of ``obj``; arrays go to ``arrays`` and are referenced."""
-    if isinstance(obj, np.ndarray) or (hasattr(obj, "__array__") and not isinstance(obj, (str, bytes))
-                                       and not np.isscalar(obj)):
+    if isinstance(obj, np.ndarray) or (
+        hasattr(obj, "__array__") and not isinstance(obj, (str, bytes)) and not np.isscalar(obj)
+    ):
         arr = np.asarray(obj)
         if arr.dtype == object:
             raise TypeError("object arrays cannot be saved; convert to numeric or a list of str")
@@ -152,7 +173,7 @@ def _decode(obj: Any, arrays) -> Any:
 
 # -- reading: sizes checked before allocation, every failure a ModelFileError -----------------
 #: An archive may declare at most this many uncompressed bytes in all ...
-MAX_TOTAL_BYTES = 64 * 2 ** 20
+MAX_TOTAL_BYTES = 64 * 2**20
 #: ... plus this many times the size of the file itself (honest model arrays compress
 #: 1-3x; zeros up to ~1000x, which is how a zip bomb expands 1 MB into 1 GiB).
 MAX_EXPANSION = 50
@@ -177,22 +198,30 @@ def _read_member(zf, info, path, budget: list) -> np.ndarray:
             shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
         else:
             raise _fail(path, name, f"unsupported .npy version {version}")
-        if dtype.hasobject or dtype.fields is not None or dtype.subdtype is not None \
-                or dtype.kind not in ARRAY_KINDS:
-            raise _fail(path, name, f"dtype {dtype.str} is not allowed in a model file "
-                                    "(numbers, booleans and text only)")
+        if dtype.hasobject or dtype.fields is not None or dtype.subdtype is not None or dtype.kind not in ARRAY_KINDS:
+            raise _fail(
+                path, name, f"dtype {dtype.str} is not allowed in a model file (numbers, booleans and text only)"
+            )
         count = 1
         for d in shape:
             count *= int(d)
         nbytes = count * dtype.itemsize
         header_len = fh.tell()
         if header_len + nbytes != info.file_size:
-            raise _fail(path, name, f"the array header declares shape {shape} of {dtype.str} "
-                                    f"({nbytes} bytes), but the archive declares {info.file_size} bytes")
+            raise _fail(
+                path,
+                name,
+                f"the array header declares shape {shape} of {dtype.str} "
+                f"({nbytes} bytes), but the archive declares {info.file_size} bytes",
+            )
         budget[0] -= nbytes
         if budget[0] < 0:
-            raise _fail(path, name, "the arrays would expand beyond the size limit for this file "
-                                    "(dam.modelfile.MAX_TOTAL_BYTES + MAX_EXPANSION x file size)")
+            raise _fail(
+                path,
+                name,
+                "the arrays would expand beyond the size limit for this file "
+                "(dam.modelfile.MAX_TOTAL_BYTES + MAX_EXPANSION x file size)",
+            )
         data = fh.read(nbytes)
         if len(data) != nbytes or fh.read(1):  # reading to the end checks the CRC
             raise _fail(path, name, "truncated array data")
@@ -246,18 +275,23 @@ def read_model_file(path) -> tuple[dict, dict]:
     except OSError as exc:
         raise ModelFileError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     if magic != b"PK\x03\x04":
-        raise ModelFileError(f"{path}: not a dam model file (it is not an npz archive; first bytes {magic!r}); "
-                             "write model files with model.save(path) or `dam fit`")
+        raise ModelFileError(
+            f"{path}: not a dam model file (it is not an npz archive; first bytes {magic!r}); "
+            "write model files with model.save(path) or `dam fit`"
+        )
     try:
         arrays = _read_archive(path, size)
     except ModelFileError:
         raise
     except Exception as exc:  # zipfile, zlib, numpy's header parser: many types for one meaning
-        raise ModelFileError(f"{path}: not a readable dam model file ({type(exc).__name__}: "
-                             f"{' '.join(str(exc).split())[:200]})") from None
+        raise ModelFileError(
+            f"{path}: not a readable dam model file ({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
+        ) from None
     if META_KEY not in arrays:
-        raise ModelFileError(f"{path}: not a dam model file (field {META_KEY!r} missing); "
-                             "write model files with model.save(path) or `dam fit`")
+        raise ModelFileError(
+            f"{path}: not a dam model file (field {META_KEY!r} missing); "
+            "write model files with model.save(path) or `dam fit`"
+        )
     raw = arrays.pop(META_KEY)
     try:
         if raw.dtype != np.uint8 or raw.ndim != 1:
@@ -270,12 +304,15 @@ def read_model_file(path) -> tuple[dict, dict]:
     if not _json_depth_ok(meta, MAX_JSON_DEPTH):
         raise _fail(path, META_KEY, f"the JSON record is nested more than {MAX_JSON_DEPTH} levels deep")
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise ModelFileError(f"{path}: field 'format' is {meta.get('format') if isinstance(meta, dict) else meta!r}, "
-                             f"expected {FORMAT!r}")
+        raise ModelFileError(
+            f"{path}: field 'format' is {meta.get('format') if isinstance(meta, dict) else meta!r}, expected {FORMAT!r}"
+        )
     version = meta.get("version")
     if not isinstance(version, int) or isinstance(version, bool) or version > FORMAT_VERSION or version < 1:
-        raise ModelFileError(f"{path}: field 'version' is {version!r}; this dam reads versions 1..{FORMAT_VERSION}"
-                             " (upgrade dam to read newer files)")
+        raise ModelFileError(
+            f"{path}: field 'version' is {version!r}; this dam reads versions 1..{FORMAT_VERSION}"
+            " (upgrade dam to read newer files)"
+        )
     for fld, kind in (("model", str), ("params", dict), ("state", dict)):
         if fld not in meta:
             raise ModelFileError(f"{path}: field {fld!r} missing")
@@ -290,8 +327,10 @@ def _read_archive(path: str, size: int) -> dict:
         declared = sum(i.file_size for i in infos)
         limit = MAX_TOTAL_BYTES + MAX_EXPANSION * size
         if declared > limit:
-            raise ModelFileError(f"{path}: the archive declares {declared} bytes of arrays in a {size}-byte "
-                                 f"file (more than the limit of {limit}): refused before reading")
+            raise ModelFileError(
+                f"{path}: the archive declares {declared} bytes of arrays in a {size}-byte "
+                f"file (more than the limit of {limit}): refused before reading"
+            )
         budget = [limit]
         arrays = {}
         for info in infos:
@@ -337,8 +376,9 @@ class StateArray:
 
     _KINDS = {"float": "f", "int": "iu", "bool": "b", "str": "U"}
 
-    def __init__(self, kind: str = "float", shape=None, *, low=None, high=None, finite: bool = True,
-                 optional: bool = False):
+    def __init__(
+        self, kind: str = "float", shape=None, *, low=None, high=None, finite: bool = True, optional: bool = False
+    ):
         if kind not in self._KINDS:
             raise ValueError(f"StateArray kind must be one of {sorted(self._KINDS)}, not {kind!r}")
         self.kind, self.shape, self.low, self.high = kind, None if shape is None else tuple(shape), low, high
@@ -356,8 +396,10 @@ class StateArray:
             raise ValueError(f"has dtype {value.dtype}, expected {self.kind} values")
         if self.shape is not None:
             if value.ndim != len(self.shape):
-                raise ValueError(f"has {value.ndim} axes (shape {value.shape}), expected {len(self.shape)} "
-                                 f"({', '.join(str(d) for d in self.shape)})")
+                raise ValueError(
+                    f"has {value.ndim} axes (shape {value.shape}), expected {len(self.shape)} "
+                    f"({', '.join(str(d) for d in self.shape)})"
+                )
             for axis, (n, d) in enumerate(zip(value.shape, self.shape)):
                 _bind(dims, d, n, f"axis {axis} of shape {value.shape}")
         if self.kind == "float" and self.finite and value.size and not np.all(np.isfinite(value)):
@@ -450,8 +492,13 @@ class StateRanges:
             raise ValueError("must be a mapping of names to [first, count]")
         n = dims.get(self.dim)
         for k, v in value.items():
-            ok = (isinstance(k, str) and k and isinstance(v, (list, tuple)) and len(v) == 2
-                  and all(isinstance(x, (int, np.integer)) and not isinstance(x, bool) for x in v))
+            ok = (
+                isinstance(k, str)
+                and k
+                and isinstance(v, (list, tuple))
+                and len(v) == 2
+                and all(isinstance(x, (int, np.integer)) and not isinstance(x, bool) for x in v)
+            )
             if not ok or v[0] < 0 or v[1] < 1 or (n is not None and v[0] + v[1] > n):
                 raise ValueError(f"[{k!r}] is {v!r}, expected [first, count] within {self.dim} = {n}")
         _bind(dims, self.keys, len(value), "its number of entries")
@@ -479,8 +526,7 @@ def _declares_schema(cls) -> bool:
     """Whether a class of ``cls``'s hierarchy other than the common base (which marks itself
     ``_state_schema_common = True``) declares state: then the schema is complete and state
     outside it is refused."""
-    return any(k.__dict__.get("_state_schema") and not k.__dict__.get("_state_schema_common")
-               for k in cls.__mro__)
+    return any(k.__dict__.get("_state_schema") and not k.__dict__.get("_state_schema_common") for k in cls.__mro__)
 
 
 def check_state(cls, state: dict, source) -> None:
@@ -500,21 +546,24 @@ def check_state(cls, state: dict, source) -> None:
         raise ModelFileError(f"{source}: field 'state' is a {type(state).__name__}, expected a mapping")
     for key in state:
         if not (isinstance(key, str) and key.isidentifier() and key.endswith("_") and not key.startswith("_")):
-            raise ModelFileError(f"{source}: field 'state' holds {key!r}, which is not a learned-attribute name "
-                                 "(an identifier ending in '_')")
+            raise ModelFileError(
+                f"{source}: field 'state' holds {key!r}, which is not a learned-attribute name "
+                "(an identifier ending in '_')"
+            )
         if hasattr(cls, key):
-            raise ModelFileError(f"{source}: field 'state.{key}' would replace the {cls.__name__} attribute "
-                                 f"of that name")
+            raise ModelFileError(
+                f"{source}: field 'state.{key}' would replace the {cls.__name__} attribute of that name"
+            )
     schema = state_schema(cls)
     missing = [k for k in schema if k not in state]
     if missing:
-        raise ModelFileError(f"{source}: field 'state.{missing[0]}' is missing: this is not a complete "
-                             f"{cls.__name__}")
+        raise ModelFileError(f"{source}: field 'state.{missing[0]}' is missing: this is not a complete {cls.__name__}")
     if _declares_schema(cls):
         extra = sorted(set(state) - set(schema))
         if extra:
-            raise ModelFileError(f"{source}: field 'state.{extra[0]}' is not part of a {cls.__name__} "
-                                 f"(its state is {', '.join(schema)})")
+            raise ModelFileError(
+                f"{source}: field 'state.{extra[0]}' is not part of a {cls.__name__} (its state is {', '.join(schema)})"
+            )
     dims: dict = {}
     for key, spec in schema.items():
         value = state[key]
@@ -550,20 +599,24 @@ def load(path):
     True
     """
     from dam.registry import get
+
     path = os.fspath(path)
     meta, arrays = read_model_file(path)
     try:
         cls = get(meta["model"])
     except KeyError as exc:
-        raise ModelFileError(f"{path}: field 'model' is {meta['model']!r}, which is not registered here "
-                             f"(class {meta.get('class', '?')}); register it before loading: "
-                             f"dam.register({meta['model']!r}, TheClass) ({exc})") from None
+        raise ModelFileError(
+            f"{path}: field 'model' is {meta['model']!r}, which is not registered here "
+            f"(class {meta.get('class', '?')}); register it before loading: "
+            f"dam.register({meta['model']!r}, TheClass) ({exc})"
+        ) from None
     try:
         params = _decode(meta["params"], arrays)
         state = _decode(meta["state"], arrays)
     except (KeyError, TypeError, ValueError) as exc:
-        raise ModelFileError(f"{path}: the stored {meta['model']!r} model is damaged (an array reference: "
-                             f"{type(exc).__name__}: {exc})") from None
+        raise ModelFileError(
+            f"{path}: the stored {meta['model']!r} model is damaged (an array reference: {type(exc).__name__}: {exc})"
+        ) from None
     check_state(cls, state, path)
     try:
         model = cls(**params)
@@ -578,6 +631,7 @@ def load(path):
     try:
         model._set_state(state)
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
-        raise ModelFileError(f"{path}: the stored {meta['model']!r} model is damaged "
-                             f"({type(exc).__name__}: {exc})") from None
+        raise ModelFileError(
+            f"{path}: the stored {meta['model']!r} model is damaged ({type(exc).__name__}: {exc})"
+        ) from None
     return model

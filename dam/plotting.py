@@ -15,12 +15,26 @@ Examples
 >>> plotting.channel_label("JA", {"units": {"JA": "deg"}})
 'JA (deg)'
 """
+
 from __future__ import annotations
 
 import os
 
-__all__ = ["PALETTE", "TRUTH", "pyplot", "channel_unit", "channel_label", "figure", "time_grid",
-           "phone_tier", "phone_boundaries", "legend_outside", "save", "model_color", "check_figure"]
+__all__ = [
+    "PALETTE",
+    "TRUTH",
+    "pyplot",
+    "channel_unit",
+    "channel_label",
+    "figure",
+    "time_grid",
+    "phone_tier",
+    "phone_boundaries",
+    "legend_outside",
+    "save",
+    "model_color",
+    "check_figure",
+]
 
 #: Okabe & Ito (2008) colour-blind-safe palette, black left out (it is the truth's colour).
 PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#999999")
@@ -29,20 +43,37 @@ TRUTH = "#000000"
 
 STYLE = {
     "axes.prop_cycle": None,  # filled in by pyplot() (needs matplotlib's cycler)
-    "axes.spines.top": False, "axes.spines.right": False,
-    "axes.titlesize": 10, "axes.labelsize": 9, "xtick.labelsize": 8, "ytick.labelsize": 8,
-    "legend.fontsize": 8, "legend.frameon": False, "figure.titlesize": 12,
-    "figure.dpi": 100, "savefig.dpi": 120, "lines.linewidth": 1.4,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "axes.titlesize": 10,
+    "axes.labelsize": 9,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "legend.fontsize": 8,
+    "legend.frameon": False,
+    "figure.titlesize": 12,
+    "figure.dpi": 100,
+    "savefig.dpi": 120,
+    "lines.linewidth": 1.4,
 }
 
 
 def pyplot():
     """``matplotlib.pyplot`` with dam's style; a non-interactive backend when none was chosen."""
     import matplotlib
-    if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "ps", "cairo", "module://matplotlib_inline.backend_inline"):
+
+    if matplotlib.get_backend().lower() not in (
+        "agg",
+        "pdf",
+        "svg",
+        "ps",
+        "cairo",
+        "module://matplotlib_inline.backend_inline",
+    ):
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from cycler import cycler
+
     matplotlib.rcParams.update({**STYLE, "axes.prop_cycle": cycler(color=list(PALETTE))})
     return plt
 
@@ -84,8 +115,14 @@ def figure(nrows: int = 1, ncols: int = 1, *, title: str, panel_size=(3.2, 2.2),
     if not title:
         raise ValueError("every figure needs a title saying what it shows and on which data")
     plt = pyplot()
-    fig, axes = plt.subplots(nrows, ncols, figsize=(panel_size[0] * ncols + 1.5, panel_size[1] * nrows + 0.8),
-                             squeeze=False, layout="constrained", **kw)
+    fig, axes = plt.subplots(
+        nrows,
+        ncols,
+        figsize=(panel_size[0] * ncols + 1.5, panel_size[1] * nrows + 0.8),
+        squeeze=False,
+        layout="constrained",
+        **kw,
+    )
     fig.suptitle(title)
     return fig, axes
 
@@ -127,6 +164,7 @@ def time_grid(nrows: int, ncols: int, alignments, *, title: str, panel_size=(4.0
         tiers.append(tier)
     fig.suptitle(title)
     import numpy as np
+
     return fig, np.array(axes, dtype=object), tiers
 
 
@@ -151,8 +189,7 @@ def phone_tier(ax, alignment, *, xlabel: str = "time (s)", name: bool = True) ->
         ax.axvline(float(s), color="0.55", lw=0.6)
         short = (e - s) / width < 0.035
         y = (0.72 if k % 2 else 0.28) if short else 0.5
-        ax.text(0.5 * (s + e), y, str(lab), ha="center", va="center", fontsize=7 if short else 8,
-                clip_on=True)
+        ax.text(0.5 * (s + e), y, str(lab), ha="center", va="center", fontsize=7 if short else 8, clip_on=True)
     ax.axvline(float(ends[-1]), color="0.55", lw=0.6)
     ax.set_xlim(float(alignment.starts[0]), float(ends[-1]))
     if name:
@@ -169,6 +206,7 @@ def legend_outside(fig, handles, labels, *, title: str | None = None, where: str
 def save(fig, path, *, dpi: int = 120) -> str:
     """Save ``fig`` to ``path`` atomically (a complete file or none) and close it; return the path."""
     from dam.corpus.atomic import atomic_path
+
     plt = pyplot()
     path = os.fspath(path)
     fmt = os.path.splitext(path)[1].lstrip(".") or "png"
@@ -187,6 +225,7 @@ def check_figure(fig) -> list[str]:
     the palette, black or a grey.
     """
     from matplotlib.colors import to_rgb
+
     fig.canvas.draw()
     problems = []
     panels = [ax for ax in fig.axes if ax.get_visible() and ax.axison]

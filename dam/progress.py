@@ -29,6 +29,7 @@ Examples
 ...     for c in progress.track(range(3), "channels", unit="channel"):
 ...         pass
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -50,9 +51,9 @@ class _Task:
         self.name, self.unit = name, unit
         self.weights = [float(w) for w in weights]
         self.total_weight = sum(self.weights) or 1.0
-        self.done = 0            # units finished
+        self.done = 0  # units finished
         self.done_weight = 0.0
-        self.running = 0         # index of the unit being worked on (for nested fractions)
+        self.running = 0  # index of the unit being worked on (for nested fractions)
         self.label = ""
 
     @property
@@ -152,10 +153,18 @@ class Reporter:
             if kind == "begin":
                 return
             eta = self.eta()
-            rec = {"type": kind, "task": t.name, "unit": t.unit, "done": t.done, "total": t.total,
-                   "label": t.label, "depth": self.stack.index(t) if t in self.stack else 0,
-                   "fraction": round(self.fraction(), 4), "elapsed": round(elapsed, 3),
-                   "eta": None if eta is None else round(eta, 3)}
+            rec = {
+                "type": kind,
+                "task": t.name,
+                "unit": t.unit,
+                "done": t.done,
+                "total": t.total,
+                "label": t.label,
+                "depth": self.stack.index(t) if t in self.stack else 0,
+                "fraction": round(self.fraction(), 4),
+                "elapsed": round(elapsed, 3),
+                "eta": None if eta is None else round(eta, 3),
+            }
             self.stream.write(json.dumps(rec) + "\n")
             self.stream.flush()
             return
@@ -168,8 +177,10 @@ class Reporter:
         eta = self.eta()
         parts = [f"{t.name} {t.done}/{t.total} {t.unit}{'s' if t.total != 1 else ''}" for t in self.stack]
         label = next((t.label for t in reversed(self.stack) if t.label), "")
-        line = (f"{' > '.join(parts)}  {100 * self.fraction():3.0f}%  {_clock(elapsed)} elapsed, "
-                f"{'?' if eta is None else _clock(eta)} left" + (f"  [{label}]" if label else ""))
+        line = (
+            f"{' > '.join(parts)}  {100 * self.fraction():3.0f}%  {_clock(elapsed)} elapsed, "
+            f"{'?' if eta is None else _clock(eta)} left" + (f"  [{label}]" if label else "")
+        )
         pad = max(0, self._width - len(line))
         self.stream.write("\r" + line + " " * pad)
         self.stream.flush()

@@ -7,6 +7,7 @@ included, comes in through the ``dam.synthesizers`` entry-point group
 (``pyproject.toml`` lists the baselines there, so that dam never imports
 them), or at run time with :func:`register`.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -21,8 +22,19 @@ _REGISTRY: dict[str, str] = {
 _LOADED: dict[str, type] = {}
 _ENTRY_POINTS_READ = False
 
-__all__ = ["register", "registered", "unregister", "get", "names", "available", "make", "registered_name",
-           "check_params", "MissingExtraError", "extra_for"]
+__all__ = [
+    "register",
+    "registered",
+    "unregister",
+    "get",
+    "names",
+    "available",
+    "make",
+    "registered_name",
+    "check_params",
+    "MissingExtraError",
+    "extra_for",
+]
 
 
 class MissingExtraError(ImportError):
@@ -36,9 +48,11 @@ def extra_for(module: str) -> str | None:
     Read from the installed package's metadata, so pyproject.toml stays the one list.
     """
     import re
+
     top = module.split(".")[0].replace("-", "_").lower()
     try:
         from importlib.metadata import requires
+
         reqs = requires("dam") or []
     except Exception:  # not installed as a distribution (a bare checkout on sys.path)
         reqs = []
@@ -122,6 +136,7 @@ def _entry_points() -> None:
     _ENTRY_POINTS_READ = True
     try:
         from importlib.metadata import entry_points
+
         for ep in entry_points(group="dam.synthesizers"):
             _REGISTRY.setdefault(ep.name, ep.value)
     except Exception:  # a broken third-party entry point must not break dam
@@ -186,8 +201,11 @@ def check_params(model):
     ValueError or TypeError
         Naming the model, the parameter, the value and what is allowed.
     """
-    check = getattr(model, "validate", None) or getattr(model, "_validate_params", None) \
+    check = (
+        getattr(model, "validate", None)
+        or getattr(model, "_validate_params", None)
         or getattr(model, "_check_params", None)
+    )
     if callable(check):
         check()
     return model

@@ -29,6 +29,7 @@ and the model's attributes right after it, so that "fit returns self",
 "inputs not mutated", "parameters not overwritten" and "predict leaves the
 model unchanged" need no fit of their own.
 """
+
 from __future__ import annotations
 
 import collections
@@ -47,8 +48,18 @@ from dam._params import InvalidParameterError, invalid_values
 from dam.base import TAGS, NotFittedError, Synthesizer, UnknownPhoneError, clone, predict_inputs
 from dam.corpus.data import Alignment, Corpus, DataError
 
-__all__ = ["check_synthesizer", "all_checks", "clone", "default_corpora", "audio_corpora", "corpora_for",
-           "each_test_setting", "assert_refused", "SkipCheck", "CheckResult"]
+__all__ = [
+    "check_synthesizer",
+    "all_checks",
+    "clone",
+    "default_corpora",
+    "audio_corpora",
+    "corpora_for",
+    "each_test_setting",
+    "assert_refused",
+    "SkipCheck",
+    "CheckResult",
+]
 
 
 class SkipCheck(unittest.SkipTest):
@@ -79,6 +90,7 @@ def default_corpora() -> tuple[Corpus, Corpus]:
     """The bundled ``tiny`` corpus split into train and test (fixed seed)."""
     if "tiny" not in _CORPORA:
         import dam.datasets as datasets
+
         _CORPORA["tiny"] = datasets.load("tiny").train_test_split(0.25, random_state=0)
     return _CORPORA["tiny"]
 
@@ -89,6 +101,7 @@ def audio_corpora() -> tuple[Corpus, Corpus]:
     more of the ``vtl`` corpus gets audio."""
     if "tiny-audio" not in _CORPORA:
         from dam.datasets.tones import tiny_with_audio
+
         _CORPORA["tiny-audio"] = tiny_with_audio().train_test_split(0.25, random_state=0)
     return _CORPORA["tiny-audio"]
 
@@ -129,8 +142,9 @@ def _fit_record(estimator: Synthesizer, train: Corpus) -> _Fit:
     params_before = copy.deepcopy(model.get_params())
     trajectories_before = [u.trajectory.copy() for u in train]
     returned = model.fit(train)
-    _FIT_CACHE[key] = _Fit(train, model, returned, params_before, trajectories_before,
-                           {k: _snapshot(v) for k, v in vars(model).items()})
+    _FIT_CACHE[key] = _Fit(
+        train, model, returned, params_before, trajectories_before, {k: _snapshot(v) for k, v in vars(model).items()}
+    )
     while len(_FIT_CACHE) > FIT_CACHE_SIZE:
         _FIT_CACHE.popitem(last=False)
     return _FIT_CACHE[key]
@@ -187,6 +201,7 @@ def check_tags(estimator, train, test):
 def _dam_extras() -> set:
     try:
         from importlib.metadata import metadata
+
         return set(metadata("dam").get_all("Provides-Extra") or [])
     except Exception:  # not installed as a distribution: nothing to compare with
         return set()
@@ -201,14 +216,16 @@ def check_parameter_constraints(estimator, train, test):
     names = set(cls._param_names())
     declared = cls.get_parameter_constraints()
     missing = sorted(names - set(declared))
-    assert not missing, (f"{cls.__name__}: no constraints declared for {missing}; add them to "
-                         "_parameter_constraints (see dam._params)")
+    assert not missing, (
+        f"{cls.__name__}: no constraints declared for {missing}; add them to _parameter_constraints (see dam._params)"
+    )
     for klass in cls.__mro__:  # Synthesizer's own declarations are conventions for whoever has the parameter
         if klass is Synthesizer or not issubclass(klass, Synthesizer):
             continue
         stray = sorted(set(klass.__dict__.get("_parameter_constraints") or {}) - names)
-        assert not stray, (f"{klass.__name__}: _parameter_constraints declares {stray}, which are not parameters "
-                           f"of {cls.__name__}")
+        assert not stray, (
+            f"{klass.__name__}: _parameter_constraints declares {stray}, which are not parameters of {cls.__name__}"
+        )
     for params in [{}] + cls.get_test_params():
         try:
             cls(**params)._validate_params()
@@ -229,8 +246,9 @@ def assert_refused(estimator, name: str, value, train: Corpus, what: str = "valu
         est.fit(train)
     except InvalidParameterError as exc:
         msg = str(exc)
-        assert cls.__name__ in msg and repr(name) in msg and repr(value) in msg, \
+        assert cls.__name__ in msg and repr(name) in msg and repr(value) in msg, (
             f"{cls.__name__}: the error for {name}={value!r} must name the class, the parameter and the value: {msg}"
+        )
     else:
         raise AssertionError(f"{cls.__name__}: fit accepted the {what} {name}={value!r}")
 
@@ -256,14 +274,20 @@ def check_predict_shapes_finite(estimator, train, test):
     assert isinstance(out, list) and len(out) == len(inputs), "a list in must give a list out"
     for u, y in zip(test, out):
         n = u.alignment.n_frames(est.frame_rate_)
-        assert y.shape == (n, train.n_channels), \
+        assert y.shape == (n, train.n_channels), (
             f"{_name(estimator)}: shape {y.shape}, expected {(n, train.n_channels)}"
+        )
         assert n == u.n_frames, f"alignment of {u.name} covers {n} frames, the utterance has {u.n_frames}"
         assert np.all(np.isfinite(y)), f"{_name(estimator)}: non-finite prediction for {u.name}"
     single = est.predict(inputs[0])
     assert isinstance(single, np.ndarray), "one alignment in must give one array out"
-    np.testing.assert_allclose(single, out[0], rtol=1e-6, atol=1e-9,
-                               err_msg=f"{_name(estimator)}: predict of one differs from predict of a list")
+    np.testing.assert_allclose(
+        single,
+        out[0],
+        rtol=1e-6,
+        atol=1e-9,
+        err_msg=f"{_name(estimator)}: predict of one differs from predict of a list",
+    )
 
 
 def check_inputs_not_mutated(estimator, train, test):
@@ -274,14 +298,16 @@ def check_inputs_not_mutated(estimator, train, test):
     before_align = [(a.labels, a.starts.copy(), a.ends.copy()) for a in test.alignments]
     fit.model.predict(_inputs(fit.model, test))
     for a, (lab, s, e) in zip(test.alignments, before_align):
-        assert a.labels == lab and np.array_equal(a.starts, s) and np.array_equal(a.ends, e), \
+        assert a.labels == lab and np.array_equal(a.starts, s) and np.array_equal(a.ends, e), (
             f"{_name(estimator)}: predict changed an alignment"
+        )
 
 
 def check_params_not_overwritten(estimator, train, test):
     fit = _fit_record(estimator, train)
-    assert _equal(fit.model.get_params(), fit.params_before), \
+    assert _equal(fit.model.get_params(), fit.params_before), (
         f"{_name(estimator)}: fit changed hyperparameters: {fit.params_before} -> {fit.model.get_params()}"
+    )
 
 
 def check_refit_idempotent(estimator, train, test):
@@ -293,15 +319,18 @@ def check_refit_idempotent(estimator, train, test):
     second = est.fit(train).predict(inputs)
     third = _fitted(estimator, train).predict(inputs)  # a fresh clone's fit, shared
     for a, b, c in zip(first, second, third):
-        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-8,
-                                   err_msg=f"{_name(estimator)}: refitting the same object changed predictions")
-        np.testing.assert_allclose(a, c, rtol=1e-6, atol=1e-8,
-                                   err_msg=f"{_name(estimator)}: a fresh fit gave other predictions")
+        np.testing.assert_allclose(
+            a, b, rtol=1e-6, atol=1e-8, err_msg=f"{_name(estimator)}: refitting the same object changed predictions"
+        )
+        np.testing.assert_allclose(
+            a, c, rtol=1e-6, atol=1e-8, err_msg=f"{_name(estimator)}: a fresh fit gave other predictions"
+        )
 
 
 def check_save_load_roundtrip(estimator, train, test):
     from dam.base import load
     from dam.registry import names, register, registered_name, unregister
+
     # a student's model: files name their model, so it is registered for the round trip only
     temporary = None if registered_name(type(estimator)) else (estimator.name or type(estimator).__name__)
     if temporary in names():  # the name belongs to another class: do not shadow it
@@ -320,8 +349,13 @@ def check_save_load_roundtrip(estimator, train, test):
     assert type(back) is type(est), f"loaded a {type(back).__name__}, saved a {type(est).__name__}"
     assert _equal(back.get_params(), est.get_params()), f"{_name(estimator)}: params changed by save/load"
     for a in _inputs(est, test):
-        np.testing.assert_allclose(back.predict(a), est.predict(a), rtol=1e-6, atol=1e-9,
-                                   err_msg=f"{_name(estimator)}: predictions changed by save/load")
+        np.testing.assert_allclose(
+            back.predict(a),
+            est.predict(a),
+            rtol=1e-6,
+            atol=1e-9,
+            err_msg=f"{_name(estimator)}: predictions changed by save/load",
+        )
 
 
 def check_time_shift_equivariance(estimator, train, test):
@@ -347,10 +381,12 @@ def check_time_shift_equivariance(estimator, train, test):
         if len(base) - start < 10:
             continue
         compared += 1
-        same = np.median(np.abs(moved[k + start:] - base[start:]), axis=0) / scale
-        wrong = np.median(np.abs(moved[start:len(base)] - base[start:]), axis=0) / scale
-        assert np.all(same <= 0.02), (f"{_name(estimator)}: prediction does not shift with the alignment "
-                                      f"(median |diff| / std per channel: {np.round(same, 4)})")
+        same = np.median(np.abs(moved[k + start :] - base[start:]), axis=0) / scale
+        wrong = np.median(np.abs(moved[start : len(base)] - base[start:]), axis=0) / scale
+        assert np.all(same <= 0.02), (
+            f"{_name(estimator)}: prediction does not shift with the alignment "
+            f"(median |diff| / std per channel: {np.round(same, 4)})"
+        )
         assert same.mean() <= wrong.mean() + 1e-12, f"{_name(estimator)}: shift makes predictions closer unshifted"
     assert compared, "time-shift check: no test utterance has 10 frames after its first two segments"
 
@@ -380,8 +416,9 @@ def check_bad_input(estimator, train, test):
         try:
             strict.predict(unknown)
         except UnknownPhoneError as exc:
-            assert "zzunknown" in str(exc) and "check.TextGrid" in str(exc), \
+            assert "zzunknown" in str(exc) and "check.TextGrid" in str(exc), (
                 f"{_name(estimator)}: the unknown-phone error must name the file and the phone: {exc}"
+            )
         else:
             raise AssertionError(f"{_name(estimator)}: unknown phone accepted with unknown_phone='error'")
         lenient = _fitted(clone(estimator).set_params(unknown_phone="fallback"), train)
@@ -402,6 +439,7 @@ def check_beats_phone_mean(estimator, train, test):
         raise SkipCheck("tagged reference: it is the baseline the others must beat")
     from dam.evaluation.metrics import evaluate
     from dam.registry import make
+
     ours = evaluate(_fitted(estimator, train), test).rmse
     ref = evaluate(_fitted(make("phone-mean"), train), test).rmse
     assert ours < ref, f"{_name(estimator)}: held-out RMSE {ours:.4g} does not beat phone-mean {ref:.4g}"
@@ -424,7 +462,8 @@ def check_predict_leaves_model_unchanged(estimator, train, test):
     changed = sorted(k for k in set(before) & set(after) if not _same_state(before[k], after[k]))
     assert not (added or removed or changed), (
         f"{_name(estimator)}: predict changed the model (added {added}, removed {removed}, changed {changed}); "
-        "prediction must be stateless")
+        "prediction must be stateless"
+    )
 
 
 class _Opaque:
@@ -450,14 +489,23 @@ def _same_state(before, now) -> bool:
     if isinstance(before, _Opaque):
         return before.obj is now
     if isinstance(before, np.ndarray):
-        return isinstance(now, np.ndarray) and before.dtype == now.dtype and np.array_equal(before, now, equal_nan=
-                                                                                              before.dtype.kind in "fc")
+        return (
+            isinstance(now, np.ndarray)
+            and before.dtype == now.dtype
+            and np.array_equal(before, now, equal_nan=before.dtype.kind in "fc")
+        )
     if isinstance(before, dict):
-        return isinstance(now, dict) and before.keys() == now.keys() and all(_same_state(before[k], now[k])
-                                                                             for k in before)
+        return (
+            isinstance(now, dict)
+            and before.keys() == now.keys()
+            and all(_same_state(before[k], now[k]) for k in before)
+        )
     if isinstance(before, (list, tuple)):
-        return type(now) is type(before) and len(now) == len(before) and all(
-            _same_state(a, b) for a, b in zip(before, now))
+        return (
+            type(now) is type(before)
+            and len(now) == len(before)
+            and all(_same_state(a, b) for a, b in zip(before, now))
+        )
     return type(before) is type(now) and (before == now or (before != before and now != now))
 
 
@@ -506,8 +554,9 @@ def check_same_seed_same_model(estimator, train, test):
     first = clone(estimator).set_params(random_state=seed).fit(train).predict(inputs)
     second = clone(estimator).set_params(random_state=seed).fit(train).predict(inputs)
     for a, b in zip(first, second):
-        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-8,
-                                   err_msg=f"{_name(estimator)}: random_state={seed} twice gave other predictions")
+        np.testing.assert_allclose(
+            a, b, rtol=1e-6, atol=1e-8, err_msg=f"{_name(estimator)}: random_state={seed} twice gave other predictions"
+        )
 
 
 _NUMPY_RUNTIME = """
@@ -537,22 +586,29 @@ def check_numpy_runtime(estimator, train, test):
     if not cls.get_tags()["numpy_runtime"]:
         raise SkipCheck("not tagged numpy_runtime")
     if "<locals>" in cls.__qualname__ or cls.__module__ == "__main__":
-        raise SkipCheck(f"{cls.__qualname__} cannot be imported by another Python (defined in a function "
-                        "or __main__)")
+        raise SkipCheck(f"{cls.__qualname__} cannot be imported by another Python (defined in a function or __main__)")
     est = _fitted(estimator, train)
     a = test[0].alignment
     with tempfile.TemporaryDirectory() as d:
         path, out = os.path.join(d, "model.dam"), os.path.join(d, "y.npy")
         est.save(path)
-        args = {"path": path, "out": out, "class": f"{cls.__module__}:{cls.__qualname__}",
-                "labels": list(a.labels), "starts": a.starts.tolist(), "ends": a.ends.tolist()}
-        proc = subprocess.run([sys.executable, "-c", _NUMPY_RUNTIME, json.dumps(args)], capture_output=True,
-                              text=True)
-        assert proc.returncode == 0, (f"{_name(estimator)}: tagged numpy_runtime, but loading and predicting "
-                                      f"with numpy alone failed:\n{proc.stderr[-2000:]}")
+        args = {
+            "path": path,
+            "out": out,
+            "class": f"{cls.__module__}:{cls.__qualname__}",
+            "labels": list(a.labels),
+            "starts": a.starts.tolist(),
+            "ends": a.ends.tolist(),
+        }
+        proc = subprocess.run([sys.executable, "-c", _NUMPY_RUNTIME, json.dumps(args)], capture_output=True, text=True)
+        assert proc.returncode == 0, (
+            f"{_name(estimator)}: tagged numpy_runtime, but loading and predicting "
+            f"with numpy alone failed:\n{proc.stderr[-2000:]}"
+        )
         y = np.load(out)
-    np.testing.assert_allclose(y, est.predict(a), rtol=1e-6, atol=1e-9,
-                               err_msg=f"{_name(estimator)}: the numpy-only prediction differs")
+    np.testing.assert_allclose(
+        y, est.predict(a), rtol=1e-6, atol=1e-9, err_msg=f"{_name(estimator)}: the numpy-only prediction differs"
+    )
 
 
 def _equal(a, b) -> bool:
@@ -565,11 +621,26 @@ def _equal(a, b) -> bool:
     return a == b or (a != a and b != b)
 
 
-_CHECKS = [check_init_stores_params, check_tags, check_parameter_constraints, check_fit_returns_self,
-           check_not_fitted, check_predict_shapes_finite, check_inputs_not_mutated, check_params_not_overwritten,
-           check_predict_leaves_model_unchanged, check_refit_idempotent, check_same_seed_same_model,
-           check_save_load_roundtrip, check_numpy_runtime, check_time_shift_equivariance, check_bad_input,
-           check_empty_corpus, check_one_utterance_corpus, check_beats_phone_mean]
+_CHECKS = [
+    check_init_stores_params,
+    check_tags,
+    check_parameter_constraints,
+    check_fit_returns_self,
+    check_not_fitted,
+    check_predict_shapes_finite,
+    check_inputs_not_mutated,
+    check_params_not_overwritten,
+    check_predict_leaves_model_unchanged,
+    check_refit_idempotent,
+    check_same_seed_same_model,
+    check_save_load_roundtrip,
+    check_numpy_runtime,
+    check_time_shift_equivariance,
+    check_bad_input,
+    check_empty_corpus,
+    check_one_utterance_corpus,
+    check_beats_phone_mean,
+]
 
 
 def all_checks() -> list:
@@ -577,8 +648,9 @@ def all_checks() -> list:
     return list(_CHECKS)
 
 
-def check_synthesizer(estimator: Synthesizer, train: Corpus | None = None,
-                      test: Corpus | None = None) -> list[CheckResult]:
+def check_synthesizer(
+    estimator: Synthesizer, train: Corpus | None = None, test: Corpus | None = None
+) -> list[CheckResult]:
     """Run every check on ``estimator``; raise AssertionError on the first failure.
 
     Parameters

@@ -3,6 +3,7 @@
 Built by the test suite (tests/test_docs.py), so a docstring that breaks the build fails CI.
 Build by hand: ``sphinx-build -b html docs docs/_build/html``.
 """
+
 import dam
 
 project = "dam"

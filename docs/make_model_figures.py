@@ -12,6 +12,7 @@ the title. Models that read audio are fitted on the ``vtl`` training phrases tha
 PNGs in docs/models/ (committed: building the docs fits nothing).
 Neural models need ``dam[jax]`` and take a minute or two each on a laptop.
 """
+
 from __future__ import annotations
 
 import sys
@@ -31,6 +32,7 @@ def figure_path(name: str) -> Path:
 def audio_data():
     """For models that read audio: the vtl phrases that have audio (4 channels), TTY drawn."""
     import dam
+
     channels = ["JA", "LP", "TTY", "TBY"]
     train = dam.datasets.load("vtl", "train").select_channels(channels)
     test = dam.datasets.load("vtl", "test").select_channels(channels)
@@ -43,6 +45,7 @@ def main(argv=None) -> int:
     import dam
     from dam import plotting
     from dam.evaluation.textbook import plot_sequence
+
     argv = sys.argv[1:] if argv is None else argv
     names = [a for a in argv if not a.startswith("-")] or dam.registry.names()
     corpus = dam.datasets.load("tiny")
@@ -62,9 +65,16 @@ def main(argv=None) -> int:
             warnings.simplefilter("ignore")
             model = dam.make(name).fit(tr)
         rmse = float(dam.evaluate(model, te).rmse)
-        fig = plot_sequence({name: model}, utt, [channel], truth=utt.trajectory, metadata=meta,
-                            title=f"{name} on held-out {where} utterance {utt.name} (test RMSE {rmse:.3f})",
-                            panel_size=(5.6, 1.5), legend="lower")
+        fig = plot_sequence(
+            {name: model},
+            utt,
+            [channel],
+            truth=utt.trajectory,
+            metadata=meta,
+            title=f"{name} on held-out {where} utterance {utt.name} (test RMSE {rmse:.3f})",
+            panel_size=(5.6, 1.5),
+            legend="lower",
+        )
         plotting.save(fig, path, dpi=64)
         print(f"{name}: fitted in {time.perf_counter() - t0:.1f} s, RMSE {rmse:.4f} -> {path.name}", flush=True)
     return 0

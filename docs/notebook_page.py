@@ -8,6 +8,7 @@ emphasis, inline code, ``$...$`` math, indented code blocks), converted here lin
 cells become ``code-block:: python``. nbconvert's own RST exporter needs pandoc, and nbsphinx
 would execute the notebook at every docs build; tests/test_docs.py checks the page is current.
 """
+
 from __future__ import annotations
 
 import json
@@ -54,9 +55,11 @@ def notebook_to_rst(notebook: dict, *, source: str = "examples/tutorial.ipynb") 
         if cell["cell_type"] == "markdown":
             parts.append(markdown_to_rst(text))
             if k == 0:
-                parts.append(f"The notebook is ``{source}`` in the repository (solutions: "
-                             "``examples/tutorial_solutions.ipynb``); run it with Jupyter to see the figures, "
-                             "or read the code here.")
+                parts.append(
+                    f"The notebook is ``{source}`` in the repository (solutions: "
+                    "``examples/tutorial_solutions.ipynb``); run it with Jupyter to see the figures, "
+                    "or read the code here."
+                )
         elif cell["cell_type"] == "code" and text.strip():
             body = "\n".join(("   " + line) if line.strip() else "" for line in text.rstrip().split("\n"))
             parts.append(f".. code-block:: python\n\n{body}")

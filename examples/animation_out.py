@@ -17,6 +17,7 @@ venv ``tests/export/export_tools.py`` installs), the same frames are also
 rendered by Blender after importing the ``.glb`` (``animation_out_blender.png``).
 The README's pictures (docs/animation_out*.png) are this script's output.
 """
+
 from __future__ import annotations
 
 import json
@@ -37,7 +38,7 @@ TEXT = "Hello, we shall animate you."
 def read_glb(path):
     raw = open(path, "rb").read()
     jlen = struct.unpack_from("<I", raw, 12)[0]
-    doc = json.loads(raw[20:20 + jlen])
+    doc = json.loads(raw[20 : 20 + jlen])
     base = 28 + jlen
 
     def acc(i):
@@ -91,12 +92,14 @@ def blender_frames(python, glb, times, out_dir):
 def run(out_dir, blender=None):
     os.makedirs(out_dir, exist_ok=True)
     from dam.speech import PhoneApproximationWarning
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PhoneApproximationWarning)  # English phones on a German model
         result = dam.animate(text=TEXT)
     glb = os.path.join(out_dir, "face.glb")
-    rep = export(result.trajectories, glb, channels=result.channels, frame_rate=result.frame_rate,
-                 alignment=result.alignment)
+    rep = export(
+        result.trajectories, glb, channels=result.channels, frame_rate=result.frame_rate, alignment=result.alignment
+    )
     print(f"wrote {glb}: {rep.n_frames} frames; " + "; ".join(rep.messages()))
 
     doc, acc = read_glb(glb)
@@ -119,6 +122,7 @@ def run(out_dir, blender=None):
     from matplotlib.collections import PolyCollection
 
     from dam import plotting
+
     plt = plotting.pyplot()
     fig, axes = plt.subplots(1, len(picks), figsize=(3.2 * len(picks), 3.4))
     for ax, (lab, t) in zip(np.atleast_1d(axes), picks):
@@ -143,25 +147,29 @@ def run(out_dir, blender=None):
             ax.imshow(plt.imread(shot))
             ax.set_title(f"/{lab}/  frame {round(t * 24)} (24 fps)", fontsize=10)
             ax.set_axis_off()
-        fig.suptitle(f'"{TEXT}": face.glb imported into Blender {blender_version(blender)}, rendered',
-                     fontsize=10)
+        fig.suptitle(f'"{TEXT}": face.glb imported into Blender {blender_version(blender)}, rendered', fontsize=10)
         fig.tight_layout()
         png = plotting.save(fig, os.path.join(out_dir, "animation_out_blender.png"), dpi=110)
         print(f"wrote {png}")
 
 
 def blender_version(python):
-    out = subprocess.run([python, "-c", "import bpy; print(bpy.app.version_string)"], capture_output=True,
-                         text=True, timeout=120)
+    out = subprocess.run(
+        [python, "-c", "import bpy; print(bpy.app.version_string)"], capture_output=True, text=True, timeout=120
+    )
     return out.stdout.strip().splitlines()[-1] if out.returncode == 0 else "?"
 
 
 def main(argv=None) -> int:
     import argparse
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out_dir", nargs="?", help="output directory (same as --out)")
-    ap.add_argument("--out", default=os.path.join(os.getcwd(), "dam-examples", "animation_out"),
-                    help="output directory (default: ./dam-examples/animation_out)")
+    ap.add_argument(
+        "--out",
+        default=os.path.join(os.getcwd(), "dam-examples", "animation_out"),
+        help="output directory (default: ./dam-examples/animation_out)",
+    )
     ap.add_argument("--blender", metavar="PYTHON", help="a Python that imports bpy: also render in Blender")
     ap.add_argument("--quick", action="store_true", help="(the example is quick already)")
     args = ap.parse_args(argv)

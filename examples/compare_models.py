@@ -14,6 +14,7 @@ working directory, which git ignores). ``--quick``: three fast models on
 
     dam compare --models dam,dam-m0,cohen-massaro,mmm,dtree --train tiny --out DIR
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,8 +29,11 @@ QUICK_MODELS = ("phone-mean", "target-interpolation", ("dam", "dam", {"max_iter"
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default="tiny", help="bundled corpus: tiny (hold-out quarter) or vtl (train/test)")
-    ap.add_argument("--out", default=str(Path.cwd() / "dam-examples" / NAME),
-                    help=f"output directory (default: ./dam-examples/{NAME})")
+    ap.add_argument(
+        "--out",
+        default=str(Path.cwd() / "dam-examples" / NAME),
+        help=f"output directory (default: ./dam-examples/{NAME})",
+    )
     ap.add_argument("--jobs", type=int, default=1, help="joblib workers over models")
     ap.add_argument("--quick", action="store_true", help="three fast models on tiny (a smoke test)")
     args = ap.parse_args(argv)

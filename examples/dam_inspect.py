@@ -18,6 +18,7 @@ for one held-out utterance, saves (figure functions: :mod:`dam.model.figures`)
 Figures go to ``--out`` (default ``dam-examples/dam_inspect/`` in the working
 directory, which git ignores). About 10 s on ``tiny``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -37,8 +38,11 @@ def main(argv=None) -> int:
     ap.add_argument("--corpus", default="tiny", help="bundled corpus name or corpus directory (default: tiny)")
     ap.add_argument("--channel", type=int, default=0, help="channel index to draw (default 0)")
     ap.add_argument("--utterance", type=int, default=0, help="index in the held-out part")
-    ap.add_argument("--out", default=str(Path.cwd() / "dam-examples" / NAME),
-                    help=f"output directory (default: ./dam-examples/{NAME})")
+    ap.add_argument(
+        "--out",
+        default=str(Path.cwd() / "dam-examples" / NAME),
+        help=f"output directory (default: ./dam-examples/{NAME})",
+    )
     ap.add_argument("--quick", action="store_true", help="the tiny corpus and a short EM (a smoke test)")
     args = ap.parse_args(argv)
     out = Path(args.out)

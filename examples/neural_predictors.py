@@ -15,6 +15,7 @@ test); on ``vtl`` the models keep their defaults (a few minutes each on a
 CPU). Figures go to ``--out`` (default ``dam-examples/neural_predictors/`` in
 the working directory, which git ignores).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,16 +34,23 @@ SMALL = {  # for the tiny corpus: small networks, more epochs
     "bi-gru": {"hidden_size": 32, "seq_len": 50, "bidirectional": True, "max_epochs": 60, "patience": 8},
     "transformer": {"d_model": 32, "d_ff": 64, "n_layers": 2, "max_epochs": 60, "patience": 8},
 }
-QUICK = {"sliding-dnn": {"hidden_layer_sizes": (16,), "max_epochs": 3},
-         "causal-mlp": {"hidden_layer_sizes": (16,), "max_epochs": 3}}
+QUICK = {
+    "sliding-dnn": {"hidden_layer_sizes": (16,), "max_epochs": 3},
+    "causal-mlp": {"hidden_layer_sizes": (16,), "max_epochs": 3},
+}
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--corpus", default="tiny", help="tiny (hold-out quarter) or vtl (train/test)")
-    ap.add_argument("--out", default=str(Path.cwd() / "dam-examples" / NAME),
-                    help=f"output directory (default: ./dam-examples/{NAME})")
-    ap.add_argument("--quick", action="store_true", help="two small feed-forward networks, three epochs, tiny (a smoke test)")
+    ap.add_argument(
+        "--out",
+        default=str(Path.cwd() / "dam-examples" / NAME),
+        help=f"output directory (default: ./dam-examples/{NAME})",
+    )
+    ap.add_argument(
+        "--quick", action="store_true", help="two small feed-forward networks, three epochs, tiny (a smoke test)"
+    )
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -62,17 +70,25 @@ def main(argv=None) -> int:
         models[label] = dam.make(name, unknown_phone="fallback", **params).fit(train)
         rmse = evaluate(models[label], test).rmse
         rows.append({"model": label, "status": "ok", "rmse": rmse})
-        print(f"{label:12s} held-out RMSE {rmse:.4g} ({models[label].n_epochs_} epochs, "
-              f"best {models[label].best_epoch_})")
+        print(
+            f"{label:12s} held-out RMSE {rmse:.4g} ({models[label].n_epochs_} epochs, best {models[label].best_epoch_})"
+        )
     rows.sort(key=lambda r: r["rmse"])
 
     u = test[0]
-    example = {"utterance": u.name, "frame_rate": u.frame_rate, "channels": list(u.channels), "truth": u.trajectory,
-               "alignment": u.alignment, "units": test.metadata.get("units"),
-               "predictions": {label: m.predict(u.alignment) for label, m in models.items()}}
-    paths = [plotting.save(plot_loss_curves(models, corpus=where), out / "loss_curves.png"),
-             plotting.save(plot_predictions(example, rows, corpus=where, max_models=len(models)),
-                           out / "predictions.png")]
+    example = {
+        "utterance": u.name,
+        "frame_rate": u.frame_rate,
+        "channels": list(u.channels),
+        "truth": u.trajectory,
+        "alignment": u.alignment,
+        "units": test.metadata.get("units"),
+        "predictions": {label: m.predict(u.alignment) for label, m in models.items()},
+    }
+    paths = [
+        plotting.save(plot_loss_curves(models, corpus=where), out / "loss_curves.png"),
+        plotting.save(plot_predictions(example, rows, corpus=where, max_models=len(models)), out / "predictions.png"),
+    ]
     print(f"wrote {paths[0]} and {paths[1]}")
     return 0
 

@@ -13,6 +13,7 @@ The figure goes to ``--out``/vtl_corpus.png (default ``dam-examples/vtl_corpus/`
 in the working directory, which git ignores). A few seconds; ``--quick`` is
 accepted for symmetry with the other examples.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -40,8 +41,11 @@ def plot_utterance(utt, metadata=None, channels=CHANNELS, *, title: str):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=str(Path.cwd() / "dam-examples" / NAME),
-                    help=f"output directory (default: ./dam-examples/{NAME})")
+    ap.add_argument(
+        "--out",
+        default=str(Path.cwd() / "dam-examples" / NAME),
+        help=f"output directory (default: ./dam-examples/{NAME})",
+    )
     ap.add_argument("--utterance", help="name of a training utterance (default: the first)")
     ap.add_argument("--quick", action="store_true", help="(the example is quick already)")
     args = ap.parse_args(argv)
@@ -52,8 +56,12 @@ def main(argv=None) -> int:
     utt = train[args.utterance] if args.utterance else train[0]
     words = " ".join(train.metadata["utterances"][utt.name]["words"])
     print(f"\nplotting {utt!r}: {words}")
-    fig = plot_utterance(utt, train.metadata, title=f"VocalTractLab corpus vtl:train, utterance {utt.name} "
-                                                    f"(\u201c{words}\u201d): four articulators over the phones")
+    fig = plot_utterance(
+        utt,
+        train.metadata,
+        title=f"VocalTractLab corpus vtl:train, utterance {utt.name} "
+        f"(\u201c{words}\u201d): four articulators over the phones",
+    )
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path = plotting.save(fig, out / "vtl_corpus.png")

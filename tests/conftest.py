@@ -1,5 +1,6 @@
 """Shared test set-up. Tests import ``dam`` as installed (pytest runs in importlib mode and
 does not put the source tree on ``sys.path``)."""
+
 import os
 
 # One BLAS thread per test process: on a shared, loaded machine OpenBLAS's
@@ -21,8 +22,10 @@ def _missing_test_requirements() -> list[str]:
     import re
     from importlib.metadata import PackageNotFoundError, requires, version
 
-    reqs = [re.match(r"\s*([A-Za-z0-9_.\-]+)(\[[^\]]*\])?[^;]*(?:;\s*extra\s*==\s*['\"]([^'\"]+)['\"])?", r)
-            for r in requires("dam") or []]
+    reqs = [
+        re.match(r"\s*([A-Za-z0-9_.\-]+)(\[[^\]]*\])?[^;]*(?:;\s*extra\s*==\s*['\"]([^'\"]+)['\"])?", r)
+        for r in requires("dam") or []
+    ]
     by_extra: dict[str, list] = {}
     for m in reqs:
         if m and m.group(3):
@@ -52,4 +55,5 @@ def pytest_sessionstart(session):
     missing = _missing_test_requirements()
     if missing:
         import pytest
-        pytest.exit(f"the test run needs {', '.join(missing)}: pip install -e \".[test]\"", returncode=1)
+
+        pytest.exit(f'the test run needs {", ".join(missing)}: pip install -e ".[test]"', returncode=1)

@@ -1,4 +1,5 @@
 """The Synthesizer interface, the model file format and the reference synthesizers."""
+
 import json
 import subprocess
 import sys
@@ -18,8 +19,10 @@ def split():
 
 
 def test_import_dam_is_light():
-    code = ("import sys, dam; bad = [m for m in ('scipy', 'sklearn', 'matplotlib', 'jax', 'praatio') "
-            "if m in sys.modules]; print(','.join(bad))")
+    code = (
+        "import sys, dam; bad = [m for m in ('scipy', 'sklearn', 'matplotlib', 'jax', 'praatio') "
+        "if m in sys.modules]; print(','.join(bad))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""
 
@@ -82,9 +85,11 @@ def test_corrupt_and_foreign_model_files_are_refused(tmp_path, split):
 def test_saved_reference_model_predicts_with_numpy_alone(tmp_path, split):
     m = TargetInterpolation().fit(split[0])
     m.save(tmp_path / "m.dam")
-    code = (f"import sys, dam, numpy as np; m = dam.load({str(tmp_path / 'm.dam')!r});"
-            "a = dam.Alignment(['sil', 'p', 'aa'], [0, .1, .2], [.1, .2, .4]); y = m.predict(a);"
-            "print(y.shape, [k for k in ('scipy', 'sklearn') if k in sys.modules])")
+    code = (
+        f"import sys, dam, numpy as np; m = dam.load({str(tmp_path / 'm.dam')!r});"
+        "a = dam.Alignment(['sil', 'p', 'aa'], [0, .1, .2], [.1, .2, .4]); y = m.predict(a);"
+        "print(y.shape, [k for k in ('scipy', 'sklearn') if k in sys.modules])"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "(41, 4) []"  # frames at 0, 0.01, ..., 0.4 s
 
@@ -147,6 +152,7 @@ def test_conformance_suite_runs_on_an_unregistered_model():
 
     class StudentMean(PhoneMean):
         """A student's copy of phone-mean, never registered by hand."""
+
         name = ""
         _tags = {"reference": True}
 
@@ -167,6 +173,7 @@ def test_conformance_suite_catches_a_model_that_ignores_timing():
 
     class Clock(PhoneMean):
         """Predicts from absolute frame index: not time-shift equivariant."""
+
         name = "clock-test"
 
         def _predict(self, alignment, n_frames):
@@ -181,6 +188,7 @@ def test_conformance_suite_catches_a_model_that_ignores_timing():
 # -- parameter constraints (dam._params) ------------------------------------------
 def test_constraint_vocabulary():
     from dam._params import Interval, InvalidParameterError, Options, TupleOf, make_constraint, validate_params
+
     deg = Interval(int, 0, None, closed="left")
     assert deg.is_satisfied_by(0) and deg.is_satisfied_by(np.int64(3))
     assert not any(deg.is_satisfied_by(v) for v in (True, np.bool_(False), 1.0, "1", -1, None))
@@ -207,15 +215,25 @@ def test_constraint_vocabulary():
     assert isinstance(info.value, ValueError) and isinstance(info.value, TypeError)
 
 
-@pytest.mark.parametrize("name,params,named", [
-    ("dam", {"degree": True}, "degree"), ("dam", {"degree": "abc"}, "degree"),
-    ("dam", {"ridge": "abc"}, "ridge"), ("dam", {"dominance_tol": "x"}, "dominance_tol"),
-    ("dam", {"ridge": float("nan")}, "ridge"), ("dam", {"tol": float("inf")}, "tol"),
-    ("dam", {"w_c": -float("inf")}, "w_c"), ("dam-m0", {"sigma_init": float("nan")}, "sigma_init"),
-    ("mmm", {"smoothness": "x"}, "smoothness"), ("mmm", {"smoothness": (1.0, float("nan"))}, "smoothness"),
-    ("cohen-massaro", {"max_nfev": -1}, "max_nfev"), ("cohen-massaro", {"c_bounds": (2.0, 1.0)}, "c_bounds"),
-    ("dtree", {"max_depth": 2.5}, "max_depth"), ("transformer", {"d_model": 10, "n_heads": 4}, "d_model"),
-])
+@pytest.mark.parametrize(
+    "name,params,named",
+    [
+        ("dam", {"degree": True}, "degree"),
+        ("dam", {"degree": "abc"}, "degree"),
+        ("dam", {"ridge": "abc"}, "ridge"),
+        ("dam", {"dominance_tol": "x"}, "dominance_tol"),
+        ("dam", {"ridge": float("nan")}, "ridge"),
+        ("dam", {"tol": float("inf")}, "tol"),
+        ("dam", {"w_c": -float("inf")}, "w_c"),
+        ("dam-m0", {"sigma_init": float("nan")}, "sigma_init"),
+        ("mmm", {"smoothness": "x"}, "smoothness"),
+        ("mmm", {"smoothness": (1.0, float("nan"))}, "smoothness"),
+        ("cohen-massaro", {"max_nfev": -1}, "max_nfev"),
+        ("cohen-massaro", {"c_bounds": (2.0, 1.0)}, "c_bounds"),
+        ("dtree", {"max_depth": 2.5}, "max_depth"),
+        ("transformer", {"d_model": 10, "n_heads": 4}, "d_model"),
+    ],
+)
 def test_bad_values_are_refused_before_any_work(name, params, named, split):
     with pytest.raises(dam.InvalidParameterError) as info:
         dam.make(name, **params).fit(split[0])
@@ -251,6 +269,7 @@ def test_dam_m0_is_a_preset_of_dam(tmp_path, split):
     import inspect
 
     from dam.model.estimator import DAM, DAMM0
+
     assert "__init__" not in vars(DAMM0) or DAMM0.__init__.__signature__  # generated, not written out
     full, m0 = inspect.signature(DAM.__init__).parameters, inspect.signature(DAMM0.__init__).parameters
     assert list(full) == list(m0)
@@ -271,6 +290,7 @@ def test_dam_m0_is_a_preset_of_dam(tmp_path, split):
 def test_model_file_saved_by_dam_0_1_still_loads(split):
     """A dam-m0 model written by dam 0.1 (commit 9ecf8bf, before DAMM0 became a preset)."""
     from pathlib import Path
+
     here = Path(__file__).parent / "data" / "models"
     m = dam.load(here / "dam-m0_dam-0.1.dam")
     assert repr(m) == "DAMM0(max_iter=3, n_resample=8, ridge=0.0001)" and m.degree == 0
@@ -281,6 +301,7 @@ def test_model_file_saved_by_dam_0_1_still_loads(split):
 
 def test_a_preset_names_only_parameters_of_its_parent():
     from dam.model.estimator import DAM
+
     with pytest.raises(TypeError, match="not parameters of DAM"):
         type("Bad", (DAM,), {"_preset": {"degre": 0}})
     with pytest.raises(TypeError, match="no __init__"):
@@ -312,6 +333,7 @@ class _Unseeded(_Seeded):
 
 def test_same_seed_check_tells_seeded_from_unseeded(split):
     from dam.testing import check_same_seed_same_model
+
     check_same_seed_same_model(_Seeded(random_state=3), *split)
     with pytest.raises(AssertionError, match="random_state=3 twice"):
         check_same_seed_same_model(_Unseeded(random_state=3), *split)
@@ -361,16 +383,19 @@ def test_numpy_runtime_check_runs_without_scipy(tmp_path, monkeypatch, split):
     import sys
 
     from dam.testing import check_numpy_runtime
+
     (tmp_path / "scipy_mean.py").write_text(
         "from baselines.reference import PhoneMean\n"
         "class ScipyMean(PhoneMean):\n"
         "    name = 'scipy-mean-test'\n"
         "    def _predict(self, alignment, n_frames):\n"
         "        import scipy.special\n"
-        "        return super()._predict(alignment, n_frames)\n")
+        "        return super()._predict(alignment, n_frames)\n"
+    )
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))
     import scipy_mean
+
     with pytest.raises(AssertionError, match="numpy alone failed"):
         check_numpy_runtime(scipy_mean.ScipyMean(), *split)
     sys.modules.pop("scipy_mean", None)
@@ -378,6 +403,7 @@ def test_numpy_runtime_check_runs_without_scipy(tmp_path, monkeypatch, split):
 
 def test_fit_cache_is_bounded(split):
     from dam import testing
+
     for k in range(testing.FIT_CACHE_SIZE + 5):
         testing._fitted(_Seeded(random_state=k), split[0])
     assert len(testing._FIT_CACHE) == testing.FIT_CACHE_SIZE

@@ -5,6 +5,7 @@ the wrong values its declaration implies.
 A model that cannot be imported fails here (every extra of ``dam[test]`` is required for
 the test run), and a check that does not apply is reported as skipped with its reason.
 """
+
 import pytest
 
 from dam import registry
@@ -12,16 +13,26 @@ from dam._params import invalid_values, make_constraint
 from dam.testing import all_checks, assert_refused, corpora_for, default_corpora
 
 # Known failures, each with its reason; strict, so the day one passes the run says so.
-KNOWN_FAILURES: dict = {   # (name, setting, check name) -> reason
-    **{(name, 1, "check_beats_phone_mean"):
-       "get_test_params()[1] is a 2-epoch smoke setting of another architecture: it runs every code path, "
-       "it does not train long enough to beat phone-mean (setting 0 does)"
-       for name in ("lstm", "gru", "transformer")},
-    **{(name, setting, "check_time_shift_equivariance"):
-       "normalize=False (the paper's plain-sum Eq. 2): shifting lengthens the leading silence (adjacent "
-       "silences are one pause), whose dominance adds in full, and on tiny the prediction moves by "
-       "4-12% of a channel's spread past the first two segments (normalize=True, the default, passes)"
-       for name, setting in (("dam", 1), ("dam-m0", 1), ("dam-paper", 0), ("dam-paper", 1))},
+KNOWN_FAILURES: dict = {  # (name, setting, check name) -> reason
+    **{
+        (
+            name,
+            1,
+            "check_beats_phone_mean",
+        ): "get_test_params()[1] is a 2-epoch smoke setting of another architecture: it runs every code path, "
+        "it does not train long enough to beat phone-mean (setting 0 does)"
+        for name in ("lstm", "gru", "transformer")
+    },
+    **{
+        (
+            name,
+            setting,
+            "check_time_shift_equivariance",
+        ): "normalize=False (the paper's plain-sum Eq. 2): shifting lengthens the leading silence (adjacent "
+        "silences are one pause), whose dominance adds in full, and on tiny the prediction moves by "
+        "4-12% of a channel's spread past the first two segments (normalize=True, the default, passes)"
+        for name, setting in (("dam", 1), ("dam-m0", 1), ("dam-paper", 0), ("dam-paper", 1))
+    },
 }
 
 
@@ -35,8 +46,9 @@ def _cases():
             for check in all_checks():
                 key = (name, setting, check.__name__)
                 marks = [pytest.mark.xfail(strict=True, reason=KNOWN_FAILURES[key])] if key in KNOWN_FAILURES else []
-                yield pytest.param(name, setting, check, marks=marks,
-                                   id=f"{name}-{setting}-{check.__name__[len('check_'):]}")
+                yield pytest.param(
+                    name, setting, check, marks=marks, id=f"{name}-{setting}-{check.__name__[len('check_') :]}"
+                )
 
 
 # get_test_params caps EM iterations to keep the suite fast: the warning is expected there.
@@ -88,6 +100,7 @@ def test_every_constraint_has_wrong_typed_and_out_of_range_values(name):
         constraints = [make_constraint(s) for s in (specs if isinstance(specs, list) else [specs])]
         for c in constraints:
             if c.bounded:
-                own = [v for v in c.invalid_values()["out of range"]
-                       if not any(o.is_satisfied_by(v) for o in constraints)]
+                own = [
+                    v for v in c.invalid_values()["out of range"] if not any(o.is_satisfied_by(v) for o in constraints)
+                ]
                 assert own, f"{name}.{param}: {c} gives no out-of-range value that the parameter refuses"

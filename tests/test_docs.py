@@ -3,6 +3,7 @@
 The reference is generated from the numpydoc docstrings (docs/, Sphinx autosummary), so a
 docstring that breaks it, or a module that no longer imports, fails here.
 """
+
 import doctest
 import importlib
 import inspect
@@ -33,12 +34,28 @@ def _public_objects():
 @pytest.mark.skipif(not DOCS.joinpath("conf.py").exists(), reason="run from a checkout: docs/ is not installed")
 def test_api_reference_builds(tmp_path):
     import shutil
+
     shutil.rmtree(DOCS / "api" / "generated", ignore_errors=True)  # autosummary's output: stale pages would fail
-    out = subprocess.run([sys.executable, "-m", "sphinx", "-q", "-b", "html", "-d", str(tmp_path / "doctrees"),
-                          str(DOCS), str(tmp_path / "html")], capture_output=True, text=True,
-                         env={**os.environ, "MPLBACKEND": "Agg"})
-    problems = [line for line in out.stderr.splitlines()
-                if "ERROR" in line or "failed to import" in line or "CRITICAL" in line]
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "sphinx",
+            "-q",
+            "-b",
+            "html",
+            "-d",
+            str(tmp_path / "doctrees"),
+            str(DOCS),
+            str(tmp_path / "html"),
+        ],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MPLBACKEND": "Agg"},
+    )
+    problems = [
+        line for line in out.stderr.splitlines() if "ERROR" in line or "failed to import" in line or "CRITICAL" in line
+    ]
     assert out.returncode == 0, out.stderr[-3000:]
     assert not problems, "\n".join(problems[:30])
     html = tmp_path / "html" / "api" / "generated"

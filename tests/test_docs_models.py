@@ -1,5 +1,6 @@
 """docs/models.rst explains every registered model: a section, an equation, a figure that exists and is
 small, and a `dam fit` line that names the model."""
+
 import re
 from pathlib import Path
 

@@ -3,6 +3,7 @@
 Every ``import`` in ``dam/`` and ``baselines/`` is parsed, function-local ones included
 (a cycle hidden inside a function is still a cycle).
 """
+
 import ast
 from pathlib import Path
 
@@ -14,11 +15,22 @@ ROOT = Path(dam.__file__).resolve().parent.parent
 
 # A module may import from its own rank or lower (README, "Architecture").
 RANKS = {
-    "dam._version": 0, "dam._lazy": 0, "dam._compat": 0, "dam.corpus": 0,
-    "dam.base": 1, "dam._params": 1, "dam.modelfile": 1, "dam.registry": 1, "dam.plotting": 1, "dam.progress": 1,
+    "dam._version": 0,
+    "dam._lazy": 0,
+    "dam._compat": 0,
+    "dam.corpus": 0,
+    "dam.base": 1,
+    "dam._params": 1,
+    "dam.modelfile": 1,
+    "dam.registry": 1,
+    "dam.plotting": 1,
+    "dam.progress": 1,
     "dam.model": 2,
-    "dam.datasets": 3, "dam.crossmap": 3, "dam.speech": 3,
-    "dam.export": 4, "dam.evaluation": 4,
+    "dam.datasets": 3,
+    "dam.crossmap": 3,
+    "dam.speech": 3,
+    "dam.export": 4,
+    "dam.evaluation": 4,
     "dam.evaluation.metrics": 1,  # scores arrays and duck-typed models; Synthesizer.score uses it
     "dam.testing": 5,
     "dam.cli": 6,
@@ -71,13 +83,15 @@ SOURCES = sorted(p for d in ("dam", "baselines") for p in (ROOT / d).rglob("*.py
 
 
 def test_every_dam_module_has_a_rank():
-    missing = [_module_name(p) for p in SOURCES
-               if _module_name(p).startswith("dam.") and _rank(_module_name(p)) is None]
+    missing = [
+        _module_name(p) for p in SOURCES if _module_name(p).startswith("dam.") and _rank(_module_name(p)) is None
+    ]
     assert not missing, f"add these to RANKS (and the README's architecture section): {missing}"
 
 
-@pytest.mark.parametrize("path", [p for p in SOURCES if _module_name(p).startswith("dam.")],
-                         ids=lambda p: _module_name(p))
+@pytest.mark.parametrize(
+    "path", [p for p in SOURCES if _module_name(p).startswith("dam.")], ids=lambda p: _module_name(p)
+)
 def test_dam_imports_go_down(path):
     me = _module_name(path)
     bad = []
@@ -95,8 +109,9 @@ def test_dam_imports_go_down(path):
     assert not bad, f"{me} imports upward:\n" + "\n".join(bad)
 
 
-@pytest.mark.parametrize("path", [p for p in SOURCES if _module_name(p).startswith("baselines")],
-                         ids=lambda p: _module_name(p))
+@pytest.mark.parametrize(
+    "path", [p for p in SOURCES if _module_name(p).startswith("baselines")], ids=lambda p: _module_name(p)
+)
 def test_baselines_use_the_public_interface(path):
     bad = []
     for line, mod in _imports(path):
@@ -151,6 +166,7 @@ def test_no_import_cycles():
                 sccs.append(sorted(comp))
 
     import sys
+
     sys.setrecursionlimit(10000)
     for v in sorted(graph):
         if v not in index:
@@ -159,16 +175,24 @@ def test_no_import_cycles():
 
 
 def test_nothing_imports_the_cli():
-    bad = [f"{_module_name(p)}:{line}" for p in SOURCES if not _module_name(p).startswith("dam.cli")
-           for line, mod in _imports(p) if mod.startswith("dam.cli")]
+    bad = [
+        f"{_module_name(p)}:{line}"
+        for p in SOURCES
+        if not _module_name(p).startswith("dam.cli")
+        for line, mod in _imports(p)
+        if mod.startswith("dam.cli")
+    ]
     assert not bad, bad
 
 
 def test_import_dam_is_light():
     import subprocess
     import sys
-    code = ("import sys, dam; heavy = [m for m in ('scipy', 'sklearn', 'matplotlib', 'jax', 'praatio') "
-            "if m in sys.modules]; print(heavy)")
+
+    code = (
+        "import sys, dam; heavy = [m for m in ('scipy', 'sklearn', 'matplotlib', 'jax', 'praatio') "
+        "if m in sys.modules]; print(heavy)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
@@ -177,7 +201,9 @@ def test_old_import_paths_warn_and_work():
     import importlib
     import sys
     import warnings
+
     from dam._compat import MOVED
+
     for old, new in MOVED.items():
         sys.modules.pop(old, None)
         with warnings.catch_warnings(record=True) as caught:

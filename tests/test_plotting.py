@@ -1,6 +1,7 @@
 """Every figure function of the toolkit renders in the one style (dam.plotting): a title saying what
 and on which data, labelled axes with units, the phones under time axes, legends outside the data,
 the colour-blind-safe palette. (The examples' figures are checked the same way in tests/examples.)"""
+
 from types import SimpleNamespace
 
 import pytest
@@ -20,13 +21,13 @@ def tiny():
 @pytest.fixture(scope="module")
 def comparison(tiny):
     corpus, train, test = tiny
-    return dam.compare(["phone-mean", "target-interpolation", ("dam", "dam", {"max_iter": 2})], train, test,
-                       verbose=0)
+    return dam.compare(["phone-mean", "target-interpolation", ("dam", "dam", {"max_iter": 2})], train, test, verbose=0)
 
 
 @pytest.fixture(scope="module")
 def fitted_dam(tiny):
     import warnings
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", dam.ConvergenceWarning)
         return dam.make("dam", max_iter=2).fit(tiny[1])
@@ -52,8 +53,9 @@ def test_predictions_small_multiples_with_units_and_phones(comparison, tiny):
     title = fig._suptitle.get_text()
     assert comparison.example["utterance"] in title and "tiny" in title
     # a row per channel (all 4), a column per model (all 3): one model per panel, not spaghetti
-    data_axes = [ax for ax in fig.axes if ax.get_lines() and ax.get_ylabel() != "phones"
-                 and not ax.get_yticks().size == 0]
+    data_axes = [
+        ax for ax in fig.axes if ax.get_lines() and ax.get_ylabel() != "phones" and not ax.get_yticks().size == 0
+    ]
     assert len(data_axes) == 4 * 3
     assert max(len([ln for ln in ax.get_lines() if ln.get_xydata().shape[0] > 2]) for ax in data_axes) == 2
     # units from corpus.json ("a.u." for the toy corpus) on every channel's axis
@@ -65,9 +67,13 @@ def test_predictions_small_multiples_with_units_and_phones(comparison, tiny):
 
 
 def test_rmse_figure_says_which_channels_and_explains_the_best_colour(comparison):
-    fig = plot_rmse(comparison.summary, comparison.per_channel, best=comparison.best, corpus=comparison.corpus,
-                    metadata={"units": dict.fromkeys(["lip_aperture", "lip_protrusion", "jaw_open", "tongue_tip"],
-                                                     "a.u.")})
+    fig = plot_rmse(
+        comparison.summary,
+        comparison.per_channel,
+        best=comparison.best,
+        corpus=comparison.corpus,
+        metadata={"units": dict.fromkeys(["lip_aperture", "lip_protrusion", "jaw_open", "tongue_tip"], "a.u.")},
+    )
     _check(fig)
     title = fig._suptitle.get_text()
     assert all(c in title for c in ("lip_aperture", "tongue_tip")) and "lower is better" in title
@@ -78,8 +84,10 @@ def test_rmse_figure_says_which_channels_and_explains_the_best_colour(comparison
 
 
 def test_loss_curves_have_a_title_and_labels():
-    nets = {name: SimpleNamespace(loss_curve_=[1.0, 0.5, 0.4], validation_curve_=[0.9, 0.6, 0.65], best_epoch_=2)
-            for name in ("sliding-dnn", "gru")}
+    nets = {
+        name: SimpleNamespace(loss_curve_=[1.0, 0.5, 0.4], validation_curve_=[0.9, 0.6, 0.65], best_epoch_=2)
+        for name in ("sliding-dnn", "gru")
+    }
     fig = plot_loss_curves(nets, corpus="tiny")
     _check(fig)
     assert "tiny" in fig._suptitle.get_text()
@@ -89,10 +97,12 @@ def test_loss_curves_have_a_title_and_labels():
 def test_dam_figures(fitted_dam, tiny):
     corpus, train, test = tiny
     phones = inspected_phones(fitted_dam)
-    figs = [plot_dominance(fitted_dam, test[0], 0, corpus="tiny", metadata=corpus.metadata),
-            plot_animemes(fitted_dam, phones, 0, corpus="tiny", metadata=corpus.metadata),
-            plot_modes(fitted_dam, phones, 0, corpus="tiny", metadata=corpus.metadata),
-            plot_astar(fitted_dam, test[0].alignment, name="tiny")]
+    figs = [
+        plot_dominance(fitted_dam, test[0], 0, corpus="tiny", metadata=corpus.metadata),
+        plot_animemes(fitted_dam, phones, 0, corpus="tiny", metadata=corpus.metadata),
+        plot_modes(fitted_dam, phones, 0, corpus="tiny", metadata=corpus.metadata),
+        plot_astar(fitted_dam, test[0].alignment, name="tiny"),
+    ]
     for fig in figs:
         _check(fig)
     # the dominance figure has the phones under its time axis

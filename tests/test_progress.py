@@ -1,5 +1,6 @@
 """dam.progress: one line (or one JSON object) per unit of work, an ETA weighted by expected cost,
 quiet off a terminal; and the command line wiring (per channel, per model)."""
+
 import io
 import json
 import subprocess
@@ -109,8 +110,9 @@ def test_bad_mode_is_refused():
 
 
 def _dam(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "dam.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "dam.cli", *args], cwd=cwd, capture_output=True, text=True, timeout=600
+    )
 
 
 def _steps(*args, cwd, **where):
@@ -134,20 +136,44 @@ def test_dam_fit_off_a_terminal_prints_no_progress(tmp_path):
 
 
 def test_dam_compare_reports_every_model_as_json(tmp_path):
-    steps = _steps("compare", "--models", "phone-mean,target-interpolation", "--train", "tiny", "--cv", "2",
-                   cwd=tmp_path, task="compare")
+    steps = _steps(
+        "compare",
+        "--models",
+        "phone-mean,target-interpolation",
+        "--train",
+        "tiny",
+        "--cv",
+        "2",
+        cwd=tmp_path,
+        task="compare",
+    )
     assert len(steps) == 4 and steps[-1]["fraction"] == 1.0 and steps[-1]["total"] == 4
     assert sorted(r["label"].split(":")[0] for r in steps) == sorted(
-        f"{m} fold {k}" for m in ("phone-mean", "target-interpolation") for k in (0, 1))
+        f"{m} fold {k}" for m in ("phone-mean", "target-interpolation") for k in (0, 1)
+    )
 
 
 def test_cohen_massaro_reports_every_channel(tmp_path):
-    steps = _steps("fit", "cohen-massaro", "tiny", "-o", "m.dam", "-p", "max_nfev=2", cwd=tmp_path,
-                   task="Cohen-Massaro")
+    steps = _steps(
+        "fit", "cohen-massaro", "tiny", "-o", "m.dam", "-p", "max_nfev=2", cwd=tmp_path, task="Cohen-Massaro"
+    )
     assert [r["label"] for r in steps] == ["lip_aperture", "lip_protrusion", "jaw_open", "tongue_tip"]
 
 
 def test_network_training_reports_every_epoch(tmp_path):
-    steps = _steps("fit", "causal-mlp", "tiny", "-o", "m.dam", "-p", "max_epochs=3", "-p", "hidden_layer_sizes=[8]",
-                   "-p", "validation_fraction=0", cwd=tmp_path, unit="epoch")
+    steps = _steps(
+        "fit",
+        "causal-mlp",
+        "tiny",
+        "-o",
+        "m.dam",
+        "-p",
+        "max_epochs=3",
+        "-p",
+        "hidden_layer_sizes=[8]",
+        "-p",
+        "validation_fraction=0",
+        cwd=tmp_path,
+        unit="epoch",
+    )
     assert [r["done"] for r in steps] == [1, 2, 3] and all("loss" in r["label"] for r in steps)

@@ -1,5 +1,6 @@
 """The README works as written: its "Writing your own model" code runs, and its numbers come
 from the benchmark results files (benchmarks/update_readme.py), never typed by hand."""
+
 import json
 import re
 import subprocess
@@ -35,14 +36,15 @@ def test_writing_your_own_model_runs_as_written_and_loads_back_in_a_fresh_sessio
     assert 0 < rmse < 1
     # The file records the registered name, not the class name.
     from dam.modelfile import read_model_file
+
     meta, _ = read_model_file(tmp_path / "smooth.dam")
     assert meta["model"] == "smooth-pm"
     # A fresh session that knows the class only as "smooth-pm" loads it and predicts what it predicted.
-    class_src = code[code.index("class SmoothPhoneMean"):code.index("check_synthesizer(SmoothPhoneMean())")]
+    class_src = code[code.index("class SmoothPhoneMean") : code.index("check_synthesizer(SmoothPhoneMean())")]
     again = textwrap.dedent(f"""
         import numpy as np
         import dam
-        {textwrap.indent(class_src, '        ').strip()}
+        {textwrap.indent(class_src, "        ").strip()}
         dam.register("smooth-pm", SmoothPhoneMean)
         m = dam.load("smooth.dam")
         test = dam.datasets.load("tiny").train_test_split(0.25)[1]
@@ -55,9 +57,9 @@ def test_writing_your_own_model_runs_as_written_and_loads_back_in_a_fresh_sessio
     np.testing.assert_allclose(float(rmse2), rmse, rtol=1e-12)
 
 
-
 def _update_readme():
     import importlib.util
+
     spec = importlib.util.spec_from_file_location("update_readme", ROOT / "benchmarks" / "update_readme.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -66,6 +68,7 @@ def _update_readme():
 
 def _block_names():
     import re
+
     return re.findall(r"<!-- generated:([\w-]+)", README.read_text(encoding="utf-8"))
 
 
@@ -80,8 +83,9 @@ def test_the_readme_has_generated_blocks_and_a_renderer_for_each():
 def test_readme_numbers_come_from_the_results_files(name):
     mod = _update_readme()
     block = next(m for m in mod.BLOCK.finditer(README.read_text(encoding="utf-8")) if m.group("name") == name)
-    assert mod.render(name) == block.group("body"), \
+    assert mod.render(name) == block.group("body"), (
         f"README block {name!r} differs from benchmarks/results: run benchmarks/update_readme.py"
+    )
 
 
 def test_the_generated_all_models_table_has_every_results_row():
@@ -92,7 +96,9 @@ def test_the_generated_all_models_table_has_every_results_row():
     for r in rows:
         if r["model"] == "phone-mean":
             continue
-        line = next(ln for ln in table.splitlines() if ln.startswith(f"| {mod.NN_LABELS.get(r['model'], r['model'])} |"))
+        line = next(
+            ln for ln in table.splitlines() if ln.startswith(f"| {mod.NN_LABELS.get(r['model'], r['model'])} |")
+        )
         assert f"{r['rmse']:.3f}" in line
 
 
@@ -101,7 +107,7 @@ def test_update_readme_check_mode_fails_on_a_hand_edit(tmp_path, monkeypatch):
     m = next(b for b in mod.BLOCK.finditer(README.read_text(encoding="utf-8")) if b.group("name") == "all-models")
     text = f"# a README\n\n{m.group(0)}\n\nmore text\n"
     m = next(mod.BLOCK.finditer(text))
-    edited = text[:m.start("body")] + m.group("body").replace("|", "| 0.123 |", 1) + text[m.end("body"):]
+    edited = text[: m.start("body")] + m.group("body").replace("|", "| 0.123 |", 1) + text[m.end("body") :]
     fake = tmp_path / "README.md"
     fake.write_text(edited, encoding="utf-8")
     monkeypatch.setattr(mod, "README", fake)

@@ -20,6 +20,7 @@ Edges: a window tap that falls outside the utterance reads the nearest frame
 (:func:`dynamic_features`) and inside ``W`` here, so training and
 generation use the same ``W``.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -66,6 +67,7 @@ def dynamic_features(x, windows=WINDOWS) -> np.ndarray:
 def window_matrix(T: int, windows=WINDOWS):
     """The sparse ``W`` of shape ``(len(windows) * T, T)`` (rows window-major) with the edge rule above."""
     from scipy.sparse import coo_matrix
+
     rows, cols, vals = [], [], []
     t = np.arange(T)
     for k, (offsets, coefs) in enumerate(windows):
@@ -73,8 +75,9 @@ def window_matrix(T: int, windows=WINDOWS):
             rows.append(k * T + t)
             cols.append(np.clip(t + o, 0, T - 1))
             vals.append(np.full(T, w))
-    return coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(len(windows) * T, T)).tocsr()
+    return coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(len(windows) * T, T)
+    ).tocsr()
 
 
 def mlpg(mean, precision, windows=WINDOWS) -> np.ndarray:
@@ -117,8 +120,8 @@ def mlpg(mean, precision, windows=WINDOWS) -> np.ndarray:
     chan = np.arange(C)
     band_idx, band_w, rhs_idx, rhs_w = [], [], [], []
     for k, (offsets, coefs) in enumerate(windows):
-        p = precision[:, k * C:(k + 1) * C]
-        pm = p * mean[:, k * C:(k + 1) * C]
+        p = precision[:, k * C : (k + 1) * C]
+        pm = p * mean[:, k * C : (k + 1) * C]
         cols = [np.clip(t + o, 0, T - 1) for o in offsets]
         for a, wa in zip(cols, coefs):
             rhs_idx.append(a[:, None] * C + chan)
@@ -127,8 +130,9 @@ def mlpg(mean, precision, windows=WINDOWS) -> np.ndarray:
                 keep = a <= b  # each unordered pair lands once in the upper triangle
                 band_idx.append(((u + a[keep] - b[keep]) * T + b[keep])[:, None] * C + chan)
                 band_w.append(wa * wb * p[keep])
-    ab = np.bincount(np.concatenate(band_idx).ravel(), np.concatenate(band_w).ravel(),
-                     minlength=(u + 1) * T * C).reshape(u + 1, T, C)  # upper form: ab[u + i - j, j] = A[i, j]
+    ab = np.bincount(
+        np.concatenate(band_idx).ravel(), np.concatenate(band_w).ravel(), minlength=(u + 1) * T * C
+    ).reshape(u + 1, T, C)  # upper form: ab[u + i - j, j] = A[i, j]
     rhs = np.bincount(np.concatenate(rhs_idx).ravel(), np.concatenate(rhs_w).ravel(), minlength=T * C).reshape(T, C)
     try:
         from scipy.linalg import solveh_banded

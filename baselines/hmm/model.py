@@ -45,6 +45,7 @@ explicit duration Gaussians fitted to the Viterbi state durations (rather
 than HSMM re-estimation) are the simplifications; each is exact when the
 state path is certain.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -62,13 +63,15 @@ _LOG2PI = float(np.log(2 * np.pi))
 def merge_silences(alignment: Alignment) -> Alignment:
     """Adjacent silence segments merged into one (a shifted alignment's new leading gap, say)."""
     labels, starts, ends = list(alignment.labels), alignment.starts, alignment.ends
-    keep = [0] + [k for k in range(1, len(labels))
-                  if not (labels[k] == alignment.silence and labels[k - 1] == alignment.silence)]
+    keep = [0] + [
+        k for k in range(1, len(labels)) if not (labels[k] == alignment.silence and labels[k - 1] == alignment.silence)
+    ]
     if len(keep) == len(labels):
         return alignment
     new_ends = [ends[keep[i + 1] - 1] if i + 1 < len(keep) else ends[-1] for i in range(len(keep))]
-    return Alignment([labels[k] for k in keep], starts[keep], new_ends, source=alignment.source,
-                     silence=alignment.silence)
+    return Alignment(
+        [labels[k] for k in keep], starts[keep], new_ends, source=alignment.source, silence=alignment.silence
+    )
 
 
 def even_states(n: int, n_states: int) -> np.ndarray:
@@ -178,8 +181,12 @@ def viterbi_em(obs, start, length, phone, n_phones: int, n_states: int, *, n_ite
     """
     obs = np.asarray(obs, dtype=float)
     start, length = np.asarray(start), np.asarray(length)
-    if (len(start) and start[0] != 0) or np.any(start[1:] != start[:-1] + length[:-1]) or length.sum() != len(obs) \
-            or np.any(length < 1):
+    if (
+        (len(start) and start[0] != 0)
+        or np.any(start[1:] != start[:-1] + length[:-1])
+        or length.sum() != len(obs)
+        or np.any(length < 1)
+    ):
         raise ValueError("segments must tile the frames in order: start[0] = 0, start[k+1] = start[k] + length[k]")
     seg = _SegmentFrames(obs, np.asarray(start), np.asarray(length))
     if floor is None:
@@ -312,9 +319,19 @@ class HMMSynthesizer(Synthesizer):
         "duration_tree_": None,
     }
 
-    def __init__(self, *, n_states: int = 5, context: int = 2, n_iter: int = 5, n_realign: int = 1,
-                 mdl_factor: float = 1.0, min_occupancy: float = 50.0, min_segments: int = 10,
-                 variance_floor: float = 0.01, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        n_states: int = 5,
+        context: int = 2,
+        n_iter: int = 5,
+        n_realign: int = 1,
+        mdl_factor: float = 1.0,
+        min_occupancy: float = 50.0,
+        min_segments: int = 10,
+        variance_floor: float = 0.01,
+        unknown_phone: str = "error",
+    ):
         self.n_states = n_states
         self.context = context
         self.n_iter = n_iter
@@ -327,12 +344,15 @@ class HMMSynthesizer(Synthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"n_states": 3, "context": 1, "min_occupancy": 10, "n_iter": 3},
-                {"n_states": 2, "context": 0, "n_iter": 1, "n_realign": 0, "unknown_phone": "fallback"}]
+        return [
+            {"n_states": 3, "context": 1, "min_occupancy": 10, "n_iter": 3},
+            {"n_states": 2, "context": 0, "n_iter": 1, "n_realign": 0, "unknown_phone": "fallback"},
+        ]
 
     # -- fitting ---------------------------------------------------------------
     def _fit(self, corpus: Corpus) -> None:
         from dam.corpus import phone_vocabulary
+
         silence = corpus.alignments[0].silence
         S = int(self.n_states)
         self.vocabulary_ = phone_vocabulary(corpus, silence=silence)
@@ -346,8 +366,9 @@ class HMMSynthesizer(Synthesizer):
         V = len(self.vocabulary_)
 
         # 3. monophone Viterbi EM: one Gaussian per (phone, state).
-        states, _, _ = viterbi_em(seg.obs, seg.start, seg.length, seg.centre, V, S, n_iter=int(self.n_iter),
-                                  floor=floor)
+        states, _, _ = viterbi_em(
+            seg.obs, seg.start, seg.length, seg.centre, V, S, n_iter=int(self.n_iter), floor=floor
+        )
         mono = seg.centre[:, None] * S + np.arange(S)[None, :]  # (n_seg, S) monophone state of each segment
 
         # 4. context clustering per state position, then re-alignment with the tied states.
@@ -363,9 +384,17 @@ class HMMSynthesizer(Synthesizer):
         for s in range(S):
             rows = states == s
             occ, sums, sumsq = _unit_stats(frame_unit[rows], seg.obs[rows], len(units))
-            tree = grow_tree(occ, sums, sumsq, units, columns, members, floor=floor,
-                             mdl_factor=float(self.mdl_factor),
-                             min_occupancy=max(float(self.min_occupancy), 1.0))
+            tree = grow_tree(
+                occ,
+                sums,
+                sumsq,
+                units,
+                columns,
+                members,
+                floor=floor,
+                mdl_factor=float(self.mdl_factor),
+                min_occupancy=max(float(self.min_occupancy), 1.0),
+            )
             tied[:, s] = leaf_offset[-1] + tree.pop("unit_leaf")[unit_of_seg]
             leaf_offset.append(leaf_offset[-1] + int((tree["question"] < 0).sum()))
             self.trees_.append(tree)
@@ -385,8 +414,17 @@ class HMMSynthesizer(Synthesizer):
         full = seg.length >= S
         occ, sums, sumsq = _unit_stats(unit_of_seg[full], dur[full], len(units))
         dfloor = np.full(S, 0.25)
-        tree = grow_tree(occ, sums, sumsq, units, columns, members, floor=dfloor, mdl_factor=float(self.mdl_factor),
-                         min_occupancy=float(self.min_segments))
+        tree = grow_tree(
+            occ,
+            sums,
+            sumsq,
+            units,
+            columns,
+            members,
+            floor=dfloor,
+            mdl_factor=float(self.mdl_factor),
+            min_occupancy=float(self.min_segments),
+        )
         leaf = tree.pop("unit_leaf")
         n_dl = int((tree["question"] < 0).sum())
         lo, ls, lss = (np.zeros(n_dl), np.zeros((n_dl, S)), np.zeros((n_dl, S)))
@@ -403,8 +441,9 @@ class HMMSynthesizer(Synthesizer):
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         labels = self._known_labels(alignment, self.unknown_phone)
         if tuple(labels) != alignment.labels:
-            alignment = Alignment(labels, alignment.starts, alignment.ends, source=alignment.source,
-                                  silence=alignment.silence)
+            alignment = Alignment(
+                labels, alignment.starts, alignment.ends, source=alignment.source, silence=alignment.silence
+            )
         alignment = merge_silences(alignment)
         S = int(self.n_states)
         counts = np.bincount(alignment.segment_index(self.frame_rate_, n_frames), minlength=len(alignment))
@@ -445,7 +484,7 @@ class HMMSynthesizer(Synthesizer):
         unknown = [lab for lab in labels if lab not in self.vocabulary_]
         if unknown:
             raise ValueError(f"phones {unknown} were not seen in training; known: {' '.join(self.vocabulary_)}")
-        ctx = context_indices(list(labels), self.vocabulary_, c, self.silence_)[c:c + 1]
+        ctx = context_indices(list(labels), self.vocabulary_, c, self.silence_)[c : c + 1]
         answers = answer_questions(ctx, self.question_offsets_, self.question_members_, c)
         return int(self.leaf_offset_[state] + tree_leaves(self.trees_[state], answers)[0])
 
@@ -463,13 +502,13 @@ class HMMSynthesizer(Synthesizer):
         """
         g = self.tied_state(labels, state)
         C = len(self.channels_)
-        return self.means_[g, :C] * self.y_scale_ + self.y_mean_, self.variances_[g, :C] * self.y_scale_ ** 2
+        return self.means_[g, :C] * self.y_scale_ + self.y_mean_, self.variances_[g, :C] * self.y_scale_**2
 
     def state_durations(self, labels) -> np.ndarray:
         """Mean frames of each state of the middle phone of ``labels`` (duration model), shape (n_states,)."""
         self.tied_state(labels, 0)  # checks the labels
         c = int(self.context)
-        ctx = context_indices(list(labels), self.vocabulary_, c, self.silence_)[c:c + 1]
+        ctx = context_indices(list(labels), self.vocabulary_, c, self.silence_)[c : c + 1]
         answers = answer_questions(ctx, self.question_offsets_, self.question_members_, c)
         return self.duration_means_[tree_leaves(self.duration_tree_, answers)[0]].copy()
 
@@ -478,7 +517,7 @@ def _unit_stats(unit, obs, n_units):
     """Occupancy (n_units,), sums and sums of squares (n_units, D) of the frames of every unit."""
     S = group_sums(unit, np.concatenate([np.ones((len(obs), 1)), obs, obs * obs], axis=1), n_units)
     D = obs.shape[1]
-    return S[:, 0], S[:, 1:D + 1], S[:, D + 1:]
+    return S[:, 0], S[:, 1 : D + 1], S[:, D + 1 :]
 
 
 def _frame_gaussians(seg, states, gauss_of_seg):
@@ -528,8 +567,13 @@ def _realign(seg, gauss_of_seg, means, variances, stay, move, S):
             o = seg.obs[frames]  # (B, n, D)
             g = gauss_of_seg[chunk]  # (B, S)
             m, p = means[g], prec[g]  # (B, S, D)
-            ll = -0.5 * (np.einsum("bnd,bsd->bns", o * o, p) - 2 * np.einsum("bnd,bsd->bns", o, m * p)
-                         + (m * m * p).sum(-1)[:, None, :] + logdet[g][:, None, :] + o.shape[-1] * _LOG2PI)
+            ll = -0.5 * (
+                np.einsum("bnd,bsd->bns", o * o, p)
+                - 2 * np.einsum("bnd,bsd->bns", o, m * p)
+                + (m * m * p).sum(-1)[:, None, :]
+                + logdet[g][:, None, :]
+                + o.shape[-1] * _LOG2PI
+            )
             path = viterbi_segments(ll, stay[chunk], move[chunk])
             rows = first[chunk][:, None] + np.arange(n)[None, :]
             states[rows] = path

@@ -20,12 +20,20 @@ a phone class: the classes of :func:`dam.corpus.taylor_categories` (Taylor
 et al.'s 60 categories, largely Odell's questions) and of
 :func:`dam.corpus.phone_class`. Positions beyond the utterance read silence.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["context_questions", "context_indices", "answer_questions", "grow_tree", "tree_leaves",
-           "gaussian_loglik", "group_sums"]
+__all__ = [
+    "context_questions",
+    "context_indices",
+    "answer_questions",
+    "grow_tree",
+    "tree_leaves",
+    "gaussian_loglik",
+    "group_sums",
+]
 
 _LOG2PI = float(np.log(2 * np.pi))
 
@@ -51,6 +59,7 @@ def context_questions(vocabulary, context: int = 2, silence: str = "sil"):
         Identical phone sets at one position are asked once.
     """
     from dam.corpus import TAYLOR_CATEGORIES, guess_alphabet, phone_class, taylor_categories
+
     vocabulary = list(vocabulary)
     alphabet = guess_alphabet(vocabulary)
     sets: list[tuple[str, frozenset]] = [(f"is-{p}", frozenset({p})) for p in vocabulary]
@@ -71,8 +80,11 @@ def context_questions(vocabulary, context: int = 2, silence: str = "sil"):
             offsets.append(off)
             members.append([p in s for p in vocabulary])
             names.append(f"{pos_name.get(off, str(off))}-{name}")
-    return (np.asarray(offsets, dtype=np.int64),
-            np.asarray(members, dtype=bool).reshape(len(offsets), len(vocabulary)), names)
+    return (
+        np.asarray(offsets, dtype=np.int64),
+        np.asarray(members, dtype=bool).reshape(len(offsets), len(vocabulary)),
+        names,
+    )
 
 
 def context_indices(labels, vocabulary, context: int, silence: str) -> np.ndarray:
@@ -110,8 +122,19 @@ def gaussian_loglik(occ, sums, sumsq, floor) -> np.ndarray:
     return -0.5 * occ * (D * (_LOG2PI + 1.0) + np.log(var).sum(axis=-1))
 
 
-def grow_tree(occ, sums, sumsq, ctx, columns, members, *, floor, mdl_factor: float = 1.0,
-              min_occupancy: float = 50.0, max_leaves: int | None = None) -> dict:
+def grow_tree(
+    occ,
+    sums,
+    sumsq,
+    ctx,
+    columns,
+    members,
+    *,
+    floor,
+    mdl_factor: float = 1.0,
+    min_occupancy: float = 50.0,
+    max_leaves: int | None = None,
+) -> dict:
     """Grow one clustering tree over units.
 
     Parameters
@@ -174,9 +197,11 @@ def grow_tree(occ, sums, sumsq, ctx, columns, members, *, floor, mdl_factor: flo
             if len(qs):
                 Y[qs] = M[qs] @ group_sums(ctx[idx, c], X[idx], V)
         Nn = total - Y
-        gain = (gaussian_loglik(Y[:, 0], Y[:, 1:D + 1], Y[:, D + 1:], floor)
-                + gaussian_loglik(Nn[:, 0], Nn[:, 1:D + 1], Nn[:, D + 1:], floor)
-                - gaussian_loglik(total[0], total[1:D + 1], total[D + 1:], floor))
+        gain = (
+            gaussian_loglik(Y[:, 0], Y[:, 1 : D + 1], Y[:, D + 1 :], floor)
+            + gaussian_loglik(Nn[:, 0], Nn[:, 1 : D + 1], Nn[:, D + 1 :], floor)
+            - gaussian_loglik(total[0], total[1 : D + 1], total[D + 1 :], floor)
+        )
         ok = (Y[:, 0] >= min_occupancy) & (Nn[:, 0] >= min_occupancy)
         if not ok.any():
             continue
@@ -197,8 +222,12 @@ def grow_tree(occ, sums, sumsq, ctx, columns, members, *, floor, mdl_factor: flo
     question = np.asarray(question, dtype=np.int64)
     leaf = np.full(len(question), -1, dtype=np.int64)
     leaf[question < 0] = np.arange(int((question < 0).sum()))
-    tree = {"question": question, "yes": np.asarray(yes, dtype=np.int64), "no": np.asarray(no, dtype=np.int64),
-            "leaf": leaf}
+    tree = {
+        "question": question,
+        "yes": np.asarray(yes, dtype=np.int64),
+        "no": np.asarray(no, dtype=np.int64),
+        "leaf": leaf,
+    }
     answers = np.asarray(members, dtype=bool)[np.arange(len(columns))[None, :], ctx[:, columns]]
     tree["unit_leaf"] = tree_leaves(tree, answers)
     return tree

@@ -28,14 +28,24 @@ frames line up:
 * ``subband_centroids`` (Paliwal 1998, VisemeNet's third feature) is, per
   filter, the power-weighted mean frequency under it, in kHz.
 """
+
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-__all__ = ["hz_to_mel", "mel_to_hz", "mel_filterbank", "analysis_times", "power_frames", "log_mel", "mfcc",
-           "subband_centroids", "LOG_FLOOR"]
+__all__ = [
+    "hz_to_mel",
+    "mel_to_hz",
+    "mel_filterbank",
+    "analysis_times",
+    "power_frames",
+    "log_mel",
+    "mfcc",
+    "subband_centroids",
+    "LOG_FLOOR",
+]
 
 #: Band energies are floored here before the log (silence gives exact zeros).
 LOG_FLOOR = 1e-10
@@ -51,8 +61,9 @@ def mel_to_hz(m):
     return 700.0 * (10.0 ** (np.asarray(m, dtype=float) / 2595.0) - 1.0)
 
 
-def mel_filterbank(n_mels: int, n_fft: int, sample_rate: float, fmin: float = 0.0,
-                   fmax: float | None = None) -> np.ndarray:
+def mel_filterbank(
+    n_mels: int, n_fft: int, sample_rate: float, fmin: float = 0.0, fmax: float | None = None
+) -> np.ndarray:
     """Triangular mel filters on the bins of an ``n_fft``-point real DFT.
 
     Parameters
@@ -78,8 +89,10 @@ def mel_filterbank(n_mels: int, n_fft: int, sample_rate: float, fmin: float = 0.
     """
     fmax = sample_rate / 2.0 if fmax is None else float(fmax)
     if not 0 <= fmin < fmax <= sample_rate / 2.0 + 1e-9:
-        raise ValueError(f"mel filters need 0 <= fmin < fmax <= sample_rate/2; got fmin={fmin}, fmax={fmax}, "
-                         f"sample_rate={sample_rate}")
+        raise ValueError(
+            f"mel filters need 0 <= fmin < fmax <= sample_rate/2; got fmin={fmin}, fmax={fmax}, "
+            f"sample_rate={sample_rate}"
+        )
     edges = mel_to_hz(np.linspace(hz_to_mel(fmin), hz_to_mel(fmax), n_mels + 2))
     freqs = np.arange(n_fft // 2 + 1) * (sample_rate / n_fft)
     lo, mid, hi = edges[:-2, None], edges[1:-1, None], edges[2:, None]
@@ -106,8 +119,9 @@ def analysis_times(n_frames: int, frame_rate: float, hop: float | None = None) -
     return np.arange(n_frames)[:, None] * period + offsets[None, :]
 
 
-def power_frames(x, sample_rate: float, times, *, window: float = 0.025, preemphasis: float = 0.97
-                 ) -> tuple[np.ndarray, int]:
+def power_frames(
+    x, sample_rate: float, times, *, window: float = 0.025, preemphasis: float = 0.97
+) -> tuple[np.ndarray, int]:
     """Power spectra of Hamming-windowed frames of ``x`` centred on ``times``.
 
     Parameters
@@ -139,13 +153,23 @@ def power_frames(x, sample_rate: float, times, *, window: float = 0.025, preemph
     idx = starts[:, None] + pad + np.arange(length)[None, :]
     frames = xp[idx] * np.hamming(length)[None, :]
     spec = np.fft.rfft(frames, n=n_fft, axis=1)
-    power = spec.real ** 2 + spec.imag ** 2
+    power = spec.real**2 + spec.imag**2
     return power.reshape(times.shape + (n_fft // 2 + 1,)), n_fft
 
 
-def log_mel(x, sample_rate: float, *, frame_rate: float, n_frames: int | None = None,
-            window: float = 0.025, hop: float | None = None, n_mels: int = 40, fmin: float = 0.0,
-            fmax: float | None = None, preemphasis: float = 0.97) -> np.ndarray:
+def log_mel(
+    x,
+    sample_rate: float,
+    *,
+    frame_rate: float,
+    n_frames: int | None = None,
+    window: float = 0.025,
+    hop: float | None = None,
+    n_mels: int = 40,
+    fmin: float = 0.0,
+    fmax: float | None = None,
+    preemphasis: float = 0.97,
+) -> np.ndarray:
     """Log mel filterbank energies, one row per trajectory frame.
 
     Parameters
@@ -176,8 +200,7 @@ def log_mel(x, sample_rate: float, *, frame_rate: float, n_frames: int | None = 
     >>> log_mel(np.sin(2 * np.pi * 440 * t), 16000, frame_rate=100).shape
     (101, 40)
     """
-    power, fb, n_frames = _filtered(x, sample_rate, frame_rate, n_frames, window, hop, n_mels, fmin, fmax,
-                                    preemphasis)
+    power, fb, n_frames = _filtered(x, sample_rate, frame_rate, n_frames, window, hop, n_mels, fmin, fmax, preemphasis)
     return np.log(np.maximum(power @ fb.T, LOG_FLOOR)).reshape(n_frames, -1)
 
 
@@ -191,9 +214,19 @@ def _filtered(x, sample_rate, frame_rate, n_frames, window, hop, n_mels, fmin, f
     return power, mel_filterbank(n_mels, n_fft, sample_rate, fmin, fmax), n_frames
 
 
-def subband_centroids(x, sample_rate: float, *, frame_rate: float, n_frames: int | None = None,
-                      window: float = 0.025, hop: float | None = None, n_mels: int = 26, fmin: float = 0.0,
-                      fmax: float | None = None, preemphasis: float = 0.97) -> np.ndarray:
+def subband_centroids(
+    x,
+    sample_rate: float,
+    *,
+    frame_rate: float,
+    n_frames: int | None = None,
+    window: float = 0.025,
+    hop: float | None = None,
+    n_mels: int = 26,
+    fmin: float = 0.0,
+    fmax: float | None = None,
+    preemphasis: float = 0.97,
+) -> np.ndarray:
     """Spectral subband centroids: the power-weighted mean frequency under each mel filter, kHz.
 
     ``sum_f f w_k(f) P(f) / sum_f w_k(f) P(f)``; a silent band gives its
@@ -204,16 +237,26 @@ def subband_centroids(x, sample_rate: float, *, frame_rate: float, n_frames: int
     -------
     ndarray, shape (n_frames, k * n_mels)
     """
-    power, fb, n_frames = _filtered(x, sample_rate, frame_rate, n_frames, window, hop, n_mels, fmin, fmax,
-                                    preemphasis)
+    power, fb, n_frames = _filtered(x, sample_rate, frame_rate, n_frames, window, hop, n_mels, fmin, fmax, preemphasis)
     freqs = np.arange(fb.shape[1]) * (sample_rate / (2 * (fb.shape[1] - 1))) / 1000.0
     power = power + LOG_FLOOR
     return ((power @ (fb * freqs).T) / (power @ fb.T)).reshape(n_frames, -1)
 
 
-def mfcc(x, sample_rate: float, *, frame_rate: float, n_frames: int | None = None, n_mfcc: int = 13,
-         window: float = 0.025, hop: float | None = None, n_mels: int = 40, fmin: float = 0.0,
-         fmax: float | None = None, preemphasis: float = 0.97) -> np.ndarray:
+def mfcc(
+    x,
+    sample_rate: float,
+    *,
+    frame_rate: float,
+    n_frames: int | None = None,
+    n_mfcc: int = 13,
+    window: float = 0.025,
+    hop: float | None = None,
+    n_mels: int = 40,
+    fmin: float = 0.0,
+    fmax: float | None = None,
+    preemphasis: float = 0.97,
+) -> np.ndarray:
     """Mel-frequency cepstral coefficients, one row per trajectory frame.
 
     The orthonormal DCT-II of :func:`log_mel`, coefficients ``0 .. n_mfcc - 1``.
@@ -236,8 +279,18 @@ def mfcc(x, sample_rate: float, *, frame_rate: float, n_frames: int | None = Non
 
     if not 1 <= n_mfcc <= n_mels:
         raise ValueError(f"n_mfcc is {n_mfcc}; it must be between 1 and n_mels={n_mels}")
-    lm = log_mel(x, sample_rate, frame_rate=frame_rate, n_frames=n_frames, window=window, hop=hop,
-                 n_mels=n_mels, fmin=fmin, fmax=fmax, preemphasis=preemphasis)
+    lm = log_mel(
+        x,
+        sample_rate,
+        frame_rate=frame_rate,
+        n_frames=n_frames,
+        window=window,
+        hop=hop,
+        n_mels=n_mels,
+        fmin=fmin,
+        fmax=fmax,
+        preemphasis=preemphasis,
+    )
     n = lm.shape[0]
     c = dct(lm.reshape(n, -1, n_mels), type=2, norm="ortho", axis=-1)[..., :n_mfcc]
     return c.reshape(n, -1)

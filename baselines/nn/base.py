@@ -19,6 +19,7 @@ keeps the weights as a list of numpy arrays (``weights_``) that the generic
 npz + JSON model format saves; the equinox network is rebuilt lazily on the
 first prediction after loading.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -105,6 +106,7 @@ class NeuralSynthesizer(Synthesizer):
     def _make_network(self, n_inputs: int, n_outputs: int, seed: int):
         """The network with its initial weights drawn from ``seed``."""
         from .train import initial_network
+
         cls, kwargs = self._network_spec(n_inputs, n_outputs)
         return initial_network(cls, kwargs, seed)
 
@@ -172,12 +174,22 @@ class NeuralSynthesizer(Synthesizer):
         """Run :func:`baselines.nn.train.train_network` with this model's settings
         (a multi-stage model calls it once per stage with its own ``loss``)."""
         from .train import make_optimizer, train_network
+
         return train_network(
-            net, *train, X_val=val[0], Y_val=val[1], W_val=val[2],
+            net,
+            *train,
+            X_val=val[0],
+            Y_val=val[1],
+            W_val=val[2],
             optimizer=make_optimizer(self.optimizer, self.learning_rate, self._clip_norm),
-            batch_size=self.batch_size, max_epochs=self.max_epochs if max_epochs is None else max_epochs,
-            patience=self.patience, key=key, verbose=self.verbose, desc=self.name or type(self).__name__,
-            loss=loss)
+            batch_size=self.batch_size,
+            max_epochs=self.max_epochs if max_epochs is None else max_epochs,
+            patience=self.patience,
+            key=key,
+            verbose=self.verbose,
+            desc=self.name or type(self).__name__,
+            loss=loss,
+        )
 
     def _finish_fit(self, encoder, train: list, val: list) -> None:
         """Hook after training (the network is ``self._net``); e.g. thresholds chosen on ``val``."""
@@ -205,11 +217,15 @@ class NeuralSynthesizer(Synthesizer):
         import os
 
         from dam.corpus import AudioClip
+
         if "audio" not in self.reads():
-            raise TypeError(f"{type(self).__name__} with encoder={self.encoder!r} reads phones, not audio; "
-                            "fit it with an audio encoder (encoder='mfcc')")
+            raise TypeError(
+                f"{type(self).__name__} with encoder={self.encoder!r} reads phones, not audio; "
+                "fit it with an audio encoder (encoder='mfcc')"
+            )
         if isinstance(audio, (str, os.PathLike)):
             from dam.speech import load_audio
+
             x, name = load_audio(audio, rate=16000)
             return self.predict(AudioClip(x, 16000, name=name))
         if sample_rate is None:
@@ -227,6 +243,7 @@ class NeuralSynthesizer(Synthesizer):
             import jax
 
             from .train import network_from_leaves
+
             # Shapes only: nothing is drawn or compiled, the saved arrays fill it.
             cls, kwargs = self._network_spec(self.n_inputs_, self.n_outputs_)
             skeleton = eqx.filter_eval_shape(lambda k: cls(**kwargs, key=k), jax.random.key(0))
@@ -243,8 +260,9 @@ class NeuralSynthesizer(Synthesizer):
         vocab = set(getattr(encoder, "vocabulary", ()))
         if vocab and any(lab not in vocab for lab in alignment.labels):
             labels = self._known_labels(alignment, self.unknown_phone)
-            alignment = Alignment(labels, alignment.starts, alignment.ends, source=alignment.source,
-                                  silence=alignment.silence)
+            alignment = Alignment(
+                labels, alignment.starts, alignment.ends, source=alignment.source, silence=alignment.silence
+            )
         out = self._forward(self._network(), encoder, alignment, n_frames)
         return out * self.y_scale_ + self.y_mean_
 

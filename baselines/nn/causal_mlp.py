@@ -16,6 +16,7 @@ here the input comes through the encoder slot (:mod:`baselines.nn.encoders`).
 Window lengths are in frames: the paper's 15 frames are 300 ms at its 50 Hz;
 at 100 Hz pass ``kx=30, ky=10`` for the same span.
 """
+
 from __future__ import annotations
 
 from .sliding_dnn import SlidingDNN
@@ -53,10 +54,18 @@ class CausalMLP(SlidingDNN):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"hidden_layer_sizes": (32,), "dropout": 0.0, "max_epochs": 20, "batch_size": 64,
-                 "learning_rate": 3e-3, "verbose": 0},
-                {"kx": 6, "ky": 2, "hidden_layer_sizes": (16,), "max_epochs": 3, "verbose": 0}]
+        return [
+            {
+                "hidden_layer_sizes": (32,),
+                "dropout": 0.0,
+                "max_epochs": 20,
+                "batch_size": 64,
+                "learning_rate": 3e-3,
+                "verbose": 0,
+            },
+            {"kx": 6, "ky": 2, "hidden_layer_sizes": (16,), "max_epochs": 3, "verbose": 0},
+        ]
 
     def _forward(self, network, encoder, alignment, n_frames):
         windows = predict_padded(network, self._inputs(encoder, alignment, n_frames))
-        return windows[:, -len(self.channels_):]  # the current frame: the last of its causal window
+        return windows[:, -len(self.channels_) :]  # the current frame: the last of its causal window

@@ -35,6 +35,7 @@ An encoder is rebuilt from JSON-able state (``state()`` / ``from_state``),
 so a saved model never pickles it. A new encoder registers in
 :data:`ENCODERS` and needs no decoder change.
 """
+
 from __future__ import annotations
 
 import os
@@ -44,9 +45,22 @@ import numpy as np
 from dam import Alignment, Corpus, DataError, Options, Utterance
 from dam.corpus import AudioClip
 
-__all__ = ["PhoneEncoder", "AudioClip", "AudioEncoder", "MFCCEncoder", "FbankEncoder", "ZhouEncoder", "FeaturesEncoder",
-           "ENCODERS", "make_encoder", "encoder_from_state", "encoder_reads", "has_audio", "EncoderSpec",
-           "FEATURES_SUFFIX"]
+__all__ = [
+    "PhoneEncoder",
+    "AudioClip",
+    "AudioEncoder",
+    "MFCCEncoder",
+    "FbankEncoder",
+    "ZhouEncoder",
+    "FeaturesEncoder",
+    "ENCODERS",
+    "make_encoder",
+    "encoder_from_state",
+    "encoder_reads",
+    "has_audio",
+    "EncoderSpec",
+    "FEATURES_SUFFIX",
+]
 
 
 class PhoneEncoder:
@@ -75,6 +89,7 @@ class PhoneEncoder:
     @classmethod
     def fit(cls, corpus: Corpus) -> PhoneEncoder:
         from dam.corpus import phone_vocabulary
+
         return cls(phone_vocabulary(corpus))
 
     def state(self) -> dict:
@@ -87,22 +102,34 @@ class PhoneEncoder:
     def frames(self, source, frame_rate: float, n_frames: int) -> np.ndarray:
         """One-hot phone of every frame, shape (n_frames, len(vocabulary)), uint8."""
         from dam.corpus import frame_phone_indices
+
         alignment = _alignment_of(source)
         idx = frame_phone_indices(alignment, frame_rate, n_frames, self.vocabulary)
         out = np.zeros((n_frames, len(self.vocabulary)), np.uint8)
         out[np.arange(n_frames), idx] = 1
         return out
 
-    def windows(self, alignment: Alignment, frame_rate: float, n_frames: int, *, k: int,
-                align: str = "center", features: str = "raw", dilation: int = 1) -> np.ndarray:
+    def windows(
+        self,
+        alignment: Alignment,
+        frame_rate: float,
+        n_frames: int,
+        *,
+        k: int,
+        align: str = "center",
+        features: str = "raw",
+        dilation: int = 1,
+    ) -> np.ndarray:
         """Features of the ``k``-frame window of every frame (:func:`dam.features.window_features`), uint8.
 
         ``dilation`` spaces the window frames that many frames apart.
         """
         from dam.corpus import window_features
+
         alignment = _alignment_of(alignment)
-        return window_features(alignment, frame_rate, n_frames, self.vocabulary, kx=k, features=features,
-                               align=align, dilation=dilation).astype(np.uint8)
+        return window_features(
+            alignment, frame_rate, n_frames, self.vocabulary, kx=k, features=features, align=align, dilation=dilation
+        ).astype(np.uint8)
 
 
 def _alignment_of(source) -> Alignment:
@@ -111,8 +138,10 @@ def _alignment_of(source) -> Alignment:
         return source
     if isinstance(source, Utterance):
         return source.alignment
-    raise TypeError(f"the 'phones' encoder reads a dam.Alignment or dam.Utterance, got {type(source).__name__}"
-                    " (audio alone needs an audio encoder: encoder='mfcc')")
+    raise TypeError(
+        f"the 'phones' encoder reads a dam.Alignment or dam.Utterance, got {type(source).__name__}"
+        " (audio alone needs an audio encoder: encoder='mfcc')"
+    )
 
 
 def has_audio(utterance) -> bool:
@@ -190,8 +219,10 @@ class AudioEncoder:
     def __init__(self, mean=None, scale=None, **options):
         unknown = set(options) - set(self.OPTIONS)
         if unknown:
-            raise ValueError(f"encoder {self.name!r} has no option {sorted(unknown)[0]!r}; its options: "
-                             f"{', '.join(f'{k} (default {v})' for k, v in self.OPTIONS.items())}")
+            raise ValueError(
+                f"encoder {self.name!r} has no option {sorted(unknown)[0]!r}; its options: "
+                f"{', '.join(f'{k} (default {v})' for k, v in self.OPTIONS.items())}"
+            )
         self.options = {**self.OPTIONS, **options}
         self.mean = None if mean is None else np.asarray(mean, dtype=np.float32)
         self.scale = None if scale is None else np.asarray(scale, dtype=np.float32)
@@ -202,12 +233,16 @@ class AudioEncoder:
         for u in corpus:
             if not has_audio(u):
                 n = sum(not has_audio(v) for v in corpus)
-                raise DataError(_name_of(u), "audio", None,
-                                f"encoder {cls.name!r} reads audio and this utterance has none "
-                                f"({n} of {len(corpus)} utterances of {corpus.name or corpus.source or 'the corpus'} "
-                                "have no audio)",
-                                "give every utterance a <stem>.wav or <stem>.flac, or keep the utterances with "
-                                "audio: corpus.subset([i for i, u in enumerate(corpus) if u.audio])")
+                raise DataError(
+                    _name_of(u),
+                    "audio",
+                    None,
+                    f"encoder {cls.name!r} reads audio and this utterance has none "
+                    f"({n} of {len(corpus)} utterances of {corpus.name or corpus.source or 'the corpus'} "
+                    "have no audio)",
+                    "give every utterance a <stem>.wav or <stem>.flac, or keep the utterances with "
+                    "audio: corpus.subset([i for i, u in enumerate(corpus) if u.audio])",
+                )
 
     @classmethod
     def fit(cls, corpus: Corpus, **options) -> AudioEncoder:
@@ -229,15 +264,20 @@ class AudioEncoder:
     def _samples(self, source) -> tuple[np.ndarray, str]:
         if isinstance(source, AudioClip):
             from dam.speech import load_audio
+
             return load_audio(source.samples, source.sample_rate, rate=self.sample_rate, source=_name_of(source))
         if isinstance(source, Utterance):
             if source.audio is None:
-                raise DataError(_name_of(source), "audio", None,
-                                f"encoder {self.name!r} reads audio and this utterance has none")
+                raise DataError(
+                    _name_of(source), "audio", None, f"encoder {self.name!r} reads audio and this utterance has none"
+                )
             from dam.speech import load_audio
+
             return load_audio(source.audio, rate=self.sample_rate)
-        raise TypeError(f"encoder {self.name!r} reads audio: give a dam.Utterance with audio or a "
-                        f"dam.corpus.AudioClip, not a {type(source).__name__} ({_name_of(source)})")
+        raise TypeError(
+            f"encoder {self.name!r} reads audio: give a dam.Utterance with audio or a "
+            f"dam.corpus.AudioClip, not a {type(source).__name__} ({_name_of(source)})"
+        )
 
     def _compute(self, samples: np.ndarray, frame_rate: float, n_frames: int) -> np.ndarray:  # pragma: no cover
         raise NotImplementedError
@@ -246,8 +286,15 @@ class AudioEncoder:
         """Unstandardized features, shape (n_frames, n_features), float32."""
         if isinstance(source, Utterance) and source.audio is not None:
             st = os.stat(source.audio)
-            key = (self.name, source.audio, st.st_size, st.st_mtime_ns, float(frame_rate), int(n_frames),
-                   tuple(sorted(self.options.items())))
+            key = (
+                self.name,
+                source.audio,
+                st.st_size,
+                st.st_mtime_ns,
+                float(frame_rate),
+                int(n_frames),
+                tuple(sorted(self.options.items())),
+            )
             return _cached(key, lambda: self._compute(self._samples(source)[0], frame_rate, n_frames))
         return self._compute(self._samples(source)[0], frame_rate, n_frames)
 
@@ -255,17 +302,29 @@ class AudioEncoder:
         """Standardized features of every frame, shape (n_frames, n_features), float32."""
         return (self.raw_frames(source, frame_rate, n_frames) - self.mean) / self.scale
 
-    def windows(self, source, frame_rate: float, n_frames: int, *, k: int, align: str = "center",
-                features: str = "raw", dilation: int = 1) -> np.ndarray:
+    def windows(
+        self,
+        source,
+        frame_rate: float,
+        n_frames: int,
+        *,
+        k: int,
+        align: str = "center",
+        features: str = "raw",
+        dilation: int = 1,
+    ) -> np.ndarray:
         """The ``k``-frame window of every frame, flattened frame by frame, shape (n_frames, k * n_features).
 
         Window frames are ``dilation`` frames apart; frames outside the utterance repeat its
         first or last frame (as the targets do, :func:`dam.corpus.window_targets`).
         """
         from dam.corpus import window_offsets
+
         if features != "raw":
-            raise ValueError(f"features={features!r} (linguistic window features) needs the 'phones' encoder; "
-                             f"encoder {self.name!r} gives raw per-frame features")
+            raise ValueError(
+                f"features={features!r} (linguistic window features) needs the 'phones' encoder; "
+                f"encoder {self.name!r} gives raw per-frame features"
+            )
         X = self.frames(source, frame_rate, n_frames)
         pos = np.clip(np.arange(n_frames)[:, None] + window_offsets(k, align, dilation)[None, :], 0, n_frames - 1)
         return X[pos].reshape(n_frames, -1)
@@ -283,8 +342,7 @@ class MFCCEncoder(AudioEncoder):
     """
 
     name = "mfcc"
-    OPTIONS = {"n_mfcc": 13, "n_mels": 40, "window": 0.025, "hop": 0.0, "fmin": 0.0, "fmax": 0.0,
-               "preemphasis": 0.97}
+    OPTIONS = {"n_mfcc": 13, "n_mels": 40, "window": 0.025, "hop": 0.0, "fmin": 0.0, "fmax": 0.0, "preemphasis": 0.97}
 
     def _settings(self) -> dict:
         o = dict(self.options)
@@ -294,10 +352,21 @@ class MFCCEncoder(AudioEncoder):
 
     def _compute(self, samples, frame_rate, n_frames):
         from .acoustic import mfcc
+
         o = self._settings()
-        return mfcc(samples, self.sample_rate, frame_rate=frame_rate, n_frames=n_frames, n_mfcc=int(o["n_mfcc"]),
-                    n_mels=int(o["n_mels"]), window=o["window"], hop=o["hop"], fmin=o["fmin"], fmax=o["fmax"],
-                    preemphasis=o["preemphasis"]).astype(np.float32)
+        return mfcc(
+            samples,
+            self.sample_rate,
+            frame_rate=frame_rate,
+            n_frames=n_frames,
+            n_mfcc=int(o["n_mfcc"]),
+            n_mels=int(o["n_mels"]),
+            window=o["window"],
+            hop=o["hop"],
+            fmin=o["fmin"],
+            fmax=o["fmax"],
+            preemphasis=o["preemphasis"],
+        ).astype(np.float32)
 
 
 class FbankEncoder(MFCCEncoder):
@@ -311,10 +380,20 @@ class FbankEncoder(MFCCEncoder):
 
     def _compute(self, samples, frame_rate, n_frames):
         from .acoustic import log_mel
+
         o = self._settings()
-        return log_mel(samples, self.sample_rate, frame_rate=frame_rate, n_frames=n_frames, n_mels=int(o["n_mels"]),
-                       window=o["window"], hop=o["hop"], fmin=o["fmin"], fmax=o["fmax"],
-                       preemphasis=o["preemphasis"]).astype(np.float32)
+        return log_mel(
+            samples,
+            self.sample_rate,
+            frame_rate=frame_rate,
+            n_frames=n_frames,
+            n_mels=int(o["n_mels"]),
+            window=o["window"],
+            hop=o["hop"],
+            fmin=o["fmin"],
+            fmax=o["fmax"],
+            preemphasis=o["preemphasis"],
+        ).astype(np.float32)
 
 
 class ZhouEncoder(MFCCEncoder):
@@ -330,11 +409,23 @@ class ZhouEncoder(MFCCEncoder):
 
     def _compute(self, samples, frame_rate, n_frames):
         from .acoustic import log_mel, mfcc, subband_centroids
+
         o = self._settings()
-        kw = dict(frame_rate=frame_rate, n_frames=n_frames, n_mels=int(o["n_mels"]), window=o["window"],
-                  hop=o["hop"], fmin=o["fmin"], fmax=o["fmax"], preemphasis=o["preemphasis"])
-        parts = [mfcc(samples, self.sample_rate, n_mfcc=int(o["n_mfcc"]), **kw),
-                 log_mel(samples, self.sample_rate, **kw), subband_centroids(samples, self.sample_rate, **kw)]
+        kw = dict(
+            frame_rate=frame_rate,
+            n_frames=n_frames,
+            n_mels=int(o["n_mels"]),
+            window=o["window"],
+            hop=o["hop"],
+            fmin=o["fmin"],
+            fmax=o["fmax"],
+            preemphasis=o["preemphasis"],
+        )
+        parts = [
+            mfcc(samples, self.sample_rate, n_mfcc=int(o["n_mfcc"]), **kw),
+            log_mel(samples, self.sample_rate, **kw),
+            subband_centroids(samples, self.sample_rate, **kw),
+        ]
         return np.concatenate(parts, axis=1).astype(np.float32)
 
 
@@ -377,18 +468,26 @@ class FeaturesEncoder(AudioEncoder):
         for u in corpus:
             if cls.path_of(u) is None:
                 n = sum(cls.path_of(v) is None for v in corpus)
-                raise DataError(_name_of(u), "features", f"{u.name}{FEATURES_SUFFIX}",
-                                f"encoder 'features' reads <stem>{FEATURES_SUFFIX} beside each utterance and "
-                                f"this one has none ({n} of {len(corpus)} utterances lack it)")
+                raise DataError(
+                    _name_of(u),
+                    "features",
+                    f"{u.name}{FEATURES_SUFFIX}",
+                    f"encoder 'features' reads <stem>{FEATURES_SUFFIX} beside each utterance and "
+                    f"this one has none ({n} of {len(corpus)} utterances lack it)",
+                )
 
     def raw_frames(self, source, frame_rate, n_frames):
         path = self.path_of(source)
         if path is None:
-            raise DataError(_name_of(source), "features", None,
-                            f"encoder 'features' reads <stem>{FEATURES_SUFFIX} beside the utterance; there is none"
-                            if isinstance(source, Utterance) else
-                            f"encoder 'features' reads <stem>{FEATURES_SUFFIX} beside a dam.Utterance, "
-                            f"not a {type(source).__name__}")
+            raise DataError(
+                _name_of(source),
+                "features",
+                None,
+                f"encoder 'features' reads <stem>{FEATURES_SUFFIX} beside the utterance; there is none"
+                if isinstance(source, Utterance)
+                else f"encoder 'features' reads <stem>{FEATURES_SUFFIX} beside a dam.Utterance, "
+                f"not a {type(source).__name__}",
+            )
         try:
             F = np.load(path, allow_pickle=False)
         except (OSError, ValueError) as exc:
@@ -401,15 +500,24 @@ class FeaturesEncoder(AudioEncoder):
         rate = float(self.options["features_rate"]) or float(frame_rate)
         rows = np.floor(np.arange(n_frames) * rate / frame_rate + 1e-9).astype(np.int64)
         if rows[-1] > F.shape[0]:  # more than one row short
-            raise DataError(path, "rows", F.shape[0],
-                            f"{n_frames} frames at {frame_rate:g} Hz need {rows[-1] + 1} rows at {rate:g} Hz")
+            raise DataError(
+                path,
+                "rows",
+                F.shape[0],
+                f"{n_frames} frames at {frame_rate:g} Hz need {rows[-1] + 1} rows at {rate:g} Hz",
+            )
         if self.mean is not None and F.shape[1] != len(self.mean):
             raise DataError(path, "columns", F.shape[1], f"the model was trained on {len(self.mean)} feature columns")
         return F[np.minimum(rows, F.shape[0] - 1)].astype(np.float32)
 
 
-ENCODERS = {"phones": PhoneEncoder, "mfcc": MFCCEncoder, "fbank": FbankEncoder, "mfcc-mfb-ssc": ZhouEncoder,
-            "features": FeaturesEncoder}
+ENCODERS = {
+    "phones": PhoneEncoder,
+    "mfcc": MFCCEncoder,
+    "fbank": FbankEncoder,
+    "mfcc-mfb-ssc": ZhouEncoder,
+    "features": FeaturesEncoder,
+}
 
 
 class EncoderSpec(Options):

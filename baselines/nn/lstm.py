@@ -10,6 +10,7 @@ input layer; the default width is 64 (not 500) and the mini-batch 32 (not 10)
 so that it trains in minutes on a CPU: ``hidden_size=500, dense_size=500,
 batch_size=10`` is the paper's setting.
 """
+
 from __future__ import annotations
 
 from .rnn import RecurrentDecoder
@@ -47,7 +48,24 @@ class FanLSTM(RecurrentDecoder):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"hidden_size": 16, "dense_size": 16, "seq_len": 32, "dropout": 0.0, "max_epochs": 25,
-                 "learning_rate": 1e-2, "batch_size": 16, "verbose": 0},
-                {"n_layers": 1, "bidirectional": False, "hidden_size": 8, "dense_size": 8, "seq_len": 16,
-                 "max_epochs": 2, "verbose": 0}]
+        return [
+            {
+                "hidden_size": 16,
+                "dense_size": 16,
+                "seq_len": 32,
+                "dropout": 0.0,
+                "max_epochs": 25,
+                "learning_rate": 1e-2,
+                "batch_size": 16,
+                "verbose": 0,
+            },
+            {
+                "n_layers": 1,
+                "bidirectional": False,
+                "hidden_size": 8,
+                "dense_size": 8,
+                "seq_len": 16,
+                "max_epochs": 2,
+                "verbose": 0,
+            },
+        ]

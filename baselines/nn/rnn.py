@@ -19,6 +19,7 @@ real frame.
 The optional ``dense_size`` input layer (tanh) gives the Fan et al. (2015)
 network Taylor et al. (2017) compared with (:mod:`baselines.nn.lstm`).
 """
+
 from __future__ import annotations
 
 import equinox as eqx
@@ -62,19 +63,23 @@ def run_recurrent_layer(cell, xs, mask, *, reverse: bool = False):
     proj = xs @ cell.weight_ih.T + cell.bias  # (length, 3 or 4 x hidden)
     zeros = jnp.zeros(cell.hidden_size, proj.dtype)
     if isinstance(cell, eqx.nn.LSTMCell):
+
         def update(state, p):
             h, c = state
             i, f, g, o = jnp.split(p + cell.weight_hh @ h, 4)
             c = sig(f) * c + sig(i) * tanh(g)
             return sig(o) * tanh(c), c
+
         init = (zeros, zeros)
     else:
+
         def update(h, p):
             ir, iz, i_n = jnp.split(p, 3)
             hr, hz, hn = jnp.split(cell.weight_hh @ h, 3)
             reset, inp = sig(ir + hr), sig(iz + hz)
             new = tanh(i_n + reset * (hn + cell.bias_n))
             return new + inp * (h - new)
+
         init = zeros
 
     def step(state, p_m):
@@ -99,14 +104,25 @@ class RecurrentNet(eqx.Module):
     head: eqx.nn.Linear
     dropout: eqx.nn.Dropout
 
-    def __init__(self, n_inputs: int, n_outputs: int, cell: str, hidden_size: int, n_layers: int,
-                 bidirectional: bool, dense_size: int, dropout: float, *, key):
+    def __init__(
+        self,
+        n_inputs: int,
+        n_outputs: int,
+        cell: str,
+        hidden_size: int,
+        n_layers: int,
+        bidirectional: bool,
+        dense_size: int,
+        dropout: float,
+        *,
+        key,
+    ):
         k_dense, k_f, k_b, k_head = jax.random.split(key, 4)
         self.dense = eqx.nn.Linear(n_inputs, dense_size, key=k_dense) if dense_size else None
         width = dense_size or n_inputs
         make = _CELLS[cell]
         self.forward, self.backward = [], []
-        for i, (kf, kb) in enumerate(zip(jax.random.split(k_f, n_layers), jax.random.split(k_b, n_layers))):
+        for _i, (kf, kb) in enumerate(zip(jax.random.split(k_f, n_layers), jax.random.split(k_b, n_layers))):
             self.forward.append(make(width, hidden_size, key=kf))
             if bidirectional:
                 self.backward.append(make(width, hidden_size, key=kb))
@@ -182,12 +198,27 @@ class RecurrentDecoder(NeuralSynthesizer):
         "bidirectional": ["boolean"],
     }
 
-    def __init__(self, *, cell: str = "gru", n_layers: int = 2, bidirectional: bool = False,
-                 hidden_size: int = 64, dense_size: int = 0, seq_len: int = 100, dropout: float = 0.25,
-                 optimizer: str = "adam", learning_rate: float = 3e-3, batch_size: int = 32,
-                 max_epochs: int = 40, patience: int = 5, validation_fraction: float = 0.1,
-                 encoder: str = "phones", random_state: int | None = 0, verbose: int = 1,
-                 unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        cell: str = "gru",
+        n_layers: int = 2,
+        bidirectional: bool = False,
+        hidden_size: int = 64,
+        dense_size: int = 0,
+        seq_len: int = 100,
+        dropout: float = 0.25,
+        optimizer: str = "adam",
+        learning_rate: float = 3e-3,
+        batch_size: int = 32,
+        max_epochs: int = 40,
+        patience: int = 5,
+        validation_fraction: float = 0.1,
+        encoder: str = "phones",
+        random_state: int | None = 0,
+        verbose: int = 1,
+        unknown_phone: str = "error",
+    ):
         self.cell = cell
         self.n_layers = n_layers
         self.bidirectional = bidirectional
@@ -208,16 +239,39 @@ class RecurrentDecoder(NeuralSynthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"n_layers": 1, "hidden_size": 16, "seq_len": 32, "dropout": 0.0, "max_epochs": 25,
-                 "learning_rate": 1e-2, "batch_size": 16, "verbose": 0},
-                {"cell": "lstm", "n_layers": 2, "bidirectional": True, "hidden_size": 8, "seq_len": 16,
-                 "max_epochs": 2, "verbose": 0}]
+        return [
+            {
+                "n_layers": 1,
+                "hidden_size": 16,
+                "seq_len": 32,
+                "dropout": 0.0,
+                "max_epochs": 25,
+                "learning_rate": 1e-2,
+                "batch_size": 16,
+                "verbose": 0,
+            },
+            {
+                "cell": "lstm",
+                "n_layers": 2,
+                "bidirectional": True,
+                "hidden_size": 8,
+                "seq_len": 16,
+                "max_epochs": 2,
+                "verbose": 0,
+            },
+        ]
 
     def _network_spec(self, n_inputs, n_outputs):
-        return RecurrentNet, dict(n_inputs=n_inputs, n_outputs=n_outputs, cell=self.cell,
-                                  hidden_size=int(self.hidden_size), n_layers=int(self.n_layers),
-                                  bidirectional=bool(self.bidirectional), dense_size=int(self.dense_size),
-                                  dropout=float(self.dropout))
+        return RecurrentNet, dict(
+            n_inputs=n_inputs,
+            n_outputs=n_outputs,
+            cell=self.cell,
+            hidden_size=int(self.hidden_size),
+            n_layers=int(self.n_layers),
+            bidirectional=bool(self.bidirectional),
+            dense_size=int(self.dense_size),
+            dropout=float(self.dropout),
+        )
 
     def _samples(self, encoder, utterance, y):
         frames = encoder.frames(utterance, self.frame_rate_, utterance.n_frames)
@@ -228,7 +282,7 @@ class RecurrentDecoder(NeuralSynthesizer):
         W = np.zeros((len(starts), L), np.float32)
         for i, s in enumerate(starts):
             m = min(L, n - s)
-            X[i, :m], Y[i, :m], W[i, :m] = frames[s:s + m], y[s:s + m], 1.0
+            X[i, :m], Y[i, :m], W[i, :m] = frames[s : s + m], y[s : s + m], 1.0
         return X, Y, W
 
     def _forward(self, network, encoder, alignment, n_frames):

@@ -14,9 +14,10 @@ plain SGD; ``SlidingDNN(**SlidingDNN.PAPER)`` is that configuration. The
 default keeps the paper's depth, dropout, batch and windows but uses 3 x 256
 units and Adam, so it trains on the bundled corpus in about a minute on a CPU.
 """
+
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import equinox as eqx
 import jax
@@ -53,8 +54,7 @@ class WindowMLP(eqx.Module):
     dropout: eqx.nn.Dropout
     activation: str = eqx.field(static=True)
 
-    def __init__(self, n_inputs: int, n_outputs: int, hidden: Sequence[int], activation: str,
-                 dropout: float, *, key):
+    def __init__(self, n_inputs: int, n_outputs: int, hidden: Sequence[int], activation: str, dropout: float, *, key):
         sizes = [int(n_inputs), *[int(h) for h in hidden], int(n_outputs)]
         keys = jax.random.split(key, len(sizes) - 1)
         self.layers = [eqx.nn.Linear(a, b, key=k) for a, b, k in zip(sizes[:-1], sizes[1:], keys)]
@@ -108,8 +108,16 @@ class SlidingDNN(NeuralSynthesizer):
 
     name = "sliding-dnn"
     #: The configuration of Taylor et al. (2017), Section 5.1.
-    PAPER = {"hidden_layer_sizes": (3000, 3000, 3000), "dropout": 0.5, "batch_size": 100,
-             "optimizer": "sgd", "learning_rate": 0.01, "kx": 11, "ky": 5, "activation": "tanh"}
+    PAPER = {
+        "hidden_layer_sizes": (3000, 3000, 3000),
+        "dropout": 0.5,
+        "batch_size": 100,
+        "optimizer": "sgd",
+        "learning_rate": 0.01,
+        "kx": 11,
+        "ky": 5,
+        "activation": "tanh",
+    }
     _align = "center"
     _parameter_constraints = {
         "kx": [Interval(int, 1, None, closed="left")],
@@ -120,12 +128,27 @@ class SlidingDNN(NeuralSynthesizer):
         "window_rate": [Interval(float, 0, None, closed="neither"), None],
     }
 
-    def __init__(self, *, kx: int = 11, ky: int = 5, features: str = "raw",
-                 hidden_layer_sizes: tuple = (256, 256, 256), activation: str = "tanh", dropout: float = 0.5,
-                 optimizer: str = "adam", learning_rate: float = 1e-3, batch_size: int = 100,
-                 max_epochs: int = 30, patience: int = 4, validation_fraction: float = 0.1,
-                 encoder: str = "phones", random_state: int | None = 0, verbose: int = 1,
-                 unknown_phone: str = "error", window_rate: float | None = None):
+    def __init__(
+        self,
+        *,
+        kx: int = 11,
+        ky: int = 5,
+        features: str = "raw",
+        hidden_layer_sizes: tuple = (256, 256, 256),
+        activation: str = "tanh",
+        dropout: float = 0.5,
+        optimizer: str = "adam",
+        learning_rate: float = 1e-3,
+        batch_size: int = 100,
+        max_epochs: int = 30,
+        patience: int = 4,
+        validation_fraction: float = 0.1,
+        encoder: str = "phones",
+        random_state: int | None = 0,
+        verbose: int = 1,
+        unknown_phone: str = "error",
+        window_rate: float | None = None,
+    ):
         self.kx = kx
         self.ky = ky
         self.window_rate = window_rate
@@ -146,32 +169,53 @@ class SlidingDNN(NeuralSynthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"hidden_layer_sizes": (32,), "dropout": 0.0, "max_epochs": 20, "batch_size": 64,
-                 "learning_rate": 3e-3, "verbose": 0},
-                {"features": "linguistic", "hidden_layer_sizes": (16, 16), "kx": 5, "ky": 3, "max_epochs": 3,
-                 "verbose": 0}]
+        return [
+            {
+                "hidden_layer_sizes": (32,),
+                "dropout": 0.0,
+                "max_epochs": 20,
+                "batch_size": 64,
+                "learning_rate": 3e-3,
+                "verbose": 0,
+            },
+            {"features": "linguistic", "hidden_layer_sizes": (16, 16), "kx": 5, "ky": 3, "max_epochs": 3, "verbose": 0},
+        ]
 
     def _network_spec(self, n_inputs, n_outputs):
-        return WindowMLP, dict(n_inputs=n_inputs, n_outputs=n_outputs,
-                               hidden=tuple(int(h) for h in self.hidden_layer_sizes),
-                               activation=self.activation, dropout=float(self.dropout))
+        return WindowMLP, dict(
+            n_inputs=n_inputs,
+            n_outputs=n_outputs,
+            hidden=tuple(int(h) for h in self.hidden_layer_sizes),
+            activation=self.activation,
+            dropout=float(self.dropout),
+        )
 
     def _dilation(self) -> int:
         """Frames between window frames (:func:`dam.corpus.window_dilation`; 1 without ``window_rate``)."""
         from dam.corpus import window_dilation
+
         return window_dilation(self.frame_rate_, getattr(self, "window_rate", None))
 
     def _inputs(self, encoder, alignment, n_frames):
-        return encoder.windows(alignment, self.frame_rate_, n_frames, k=self.kx, align=self._align,
-                               features=self.features, dilation=self._dilation())
+        return encoder.windows(
+            alignment,
+            self.frame_rate_,
+            n_frames,
+            k=self.kx,
+            align=self._align,
+            features=self.features,
+            dilation=self._dilation(),
+        )
 
     def _samples(self, encoder, utterance, y):
         from dam.corpus import window_targets
+
         X = self._inputs(encoder, utterance, utterance.n_frames)
         Y = window_targets(y, ky=self.ky, align=self._align, dilation=self._dilation()).astype(np.float32)
         return X, Y, np.ones(len(X), np.float32)
 
     def _forward(self, network, encoder, alignment, n_frames):
         from dam.corpus import overlap_average
+
         windows = predict_padded(network, self._inputs(encoder, alignment, n_frames))
         return overlap_average(windows, self.ky, len(self.channels_), align=self._align, dilation=self._dilation())

@@ -17,6 +17,7 @@ Prediction (:func:`predict_padded`): the input is padded to a bucketed
 length (a power of two) so that the jit cache is reused across utterances of
 similar length; a second call with the same bucket never recompiles.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -30,8 +31,18 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-__all__ = ["TrainHistory", "train_network", "make_optimizer", "weighted_mse", "predict_padded",
-           "bucket_length", "TRACE_COUNT", "initial_network", "network_leaves", "network_from_leaves"]
+__all__ = [
+    "TrainHistory",
+    "train_network",
+    "make_optimizer",
+    "weighted_mse",
+    "predict_padded",
+    "bucket_length",
+    "TRACE_COUNT",
+    "initial_network",
+    "network_leaves",
+    "network_from_leaves",
+]
 
 # How many times the prediction function has been traced (compiled); the
 # tests read it to prove that a second prediction does not recompile.
@@ -115,9 +126,25 @@ def _host(X, Y, W):
     return X, np.asarray(Y, dtype=np.float32), np.asarray(W, dtype=np.float32)
 
 
-def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer, batch_size: int,
-                  max_epochs: int, patience: int, key, verbose: int = 1, desc: str = "training",
-                  tol: float = 0.0, loss=None):
+def train_network(
+    net,
+    X,
+    Y,
+    W,
+    *,
+    X_val=None,
+    Y_val=None,
+    W_val=None,
+    optimizer,
+    batch_size: int,
+    max_epochs: int,
+    patience: int,
+    key,
+    verbose: int = 1,
+    desc: str = "training",
+    tol: float = 0.0,
+    loss=None,
+):
     """Fit ``net`` to ``(X, Y, W)`` by mini-batch gradient descent on the weighted MSE.
 
     Parameters
@@ -170,7 +197,7 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
         # Host-side chunks of one compiled size; padded rows carry weight 0.
         total = count = 0.0
         for lo in range(0, X.shape[0], eval_chunk):
-            sl = [a[lo:lo + eval_chunk] for a in (X, Y, W)]
+            sl = [a[lo : lo + eval_chunk] for a in (X, Y, W)]
             pad = eval_chunk - sl[0].shape[0]
             if pad:
                 sl = [np.concatenate([a, np.zeros((pad,) + a.shape[1:], a.dtype)]) for a in sl]
@@ -189,8 +216,9 @@ def train_network(net, X, Y, W, *, X_val=None, Y_val=None, W_val=None, optimizer
             net, opt_state, value, key = _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size, loss_fn)
             value = float(value)
             if not math.isfinite(value):
-                raise FloatingPointError(f"{desc}: the training loss became {value} at epoch {epoch}; "
-                                         "lower the learning rate")
+                raise FloatingPointError(
+                    f"{desc}: the training loss became {value} at epoch {epoch}; lower the learning rate"
+                )
             history.loss_curve.append(value)
             shown = f"loss {value:.4g}"
             if validate:
@@ -231,10 +259,10 @@ def _run_epoch(net, opt_state, X, Y, W, key, optimizer, batch_size, loss_fn=_bat
     def step(carry, idx_k):
         params, state = carry
         idx, kb = idx_k
-        loss, grads = jax.value_and_grad(
-            lambda p: loss_fn(eqx.combine(p, static), X[idx], Y[idx], W[idx], kb))(params)
+        loss, grads = jax.value_and_grad(lambda p: loss_fn(eqx.combine(p, static), X[idx], Y[idx], W[idx], kb))(params)
         updates, state = optimizer.update(grads, state, params)
         return (optax.apply_updates(params, updates), state), loss
+
     keys = jax.random.split(k_drop, order.shape[0])
     (params, opt_state), losses = jax.lax.scan(step, (params, opt_state), (order, keys))
     return eqx.combine(params, static), opt_state, jnp.mean(losses), key
@@ -315,9 +343,11 @@ def initial_network(cls, kwargs: dict, seed: int):
 
     def init(node):
         if isinstance(node, eqx.nn.LayerNorm):
-            return eqx.tree_at(lambda m: (m.weight, m.bias), node,
-                               (jnp.ones(node.weight.shape, node.weight.dtype),
-                                jnp.zeros(node.bias.shape, node.bias.dtype)))
+            return eqx.tree_at(
+                lambda m: (m.weight, m.bias),
+                node,
+                (jnp.ones(node.weight.shape, node.weight.dtype), jnp.zeros(node.bias.shape, node.bias.dtype)),
+            )
         if isinstance(node, eqx.nn.Linear):
             fill = draw(1.0 / math.sqrt(max(1, node.weight.shape[1])))
         elif isinstance(node, cells):
@@ -337,7 +367,7 @@ def network_leaves(net) -> list[np.ndarray]:
     return [np.asarray(leaf) for leaf in jax.tree_util.tree_leaves(eqx.filter(net, eqx.is_array))]
 
 
-def network_from_leaves(skeleton, leaves) -> "eqx.Module":
+def network_from_leaves(skeleton, leaves) -> eqx.Module:
     """Put saved ``leaves`` into ``skeleton`` (a network of the same hyperparameters,
     e.g. from ``equinox.filter_eval_shape``, whose arrays may be shape placeholders).
 

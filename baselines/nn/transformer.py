@@ -18,6 +18,7 @@ window (neighbouring windows overlap almost completely) and Adam with the
 squared loss (the paper's L1 warm-up and 5e-8 learning rate are for its
 much larger model).
 """
+
 from __future__ import annotations
 
 import equinox as eqx
@@ -25,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from dam import InvalidParameterError, Interval
+from dam import Interval, InvalidParameterError
 
 from .base import NeuralSynthesizer
 from .train import predict_padded
@@ -46,8 +47,9 @@ class EncoderLayer(eqx.Module):
     def __init__(self, d_model: int, n_heads: int, d_ff: int, dropout: float, *, key):
         k1, k2, k3 = jax.random.split(key, 3)
         self.norm1 = eqx.nn.LayerNorm(d_model)
-        self.attention = eqx.nn.MultiheadAttention(n_heads, d_model, use_query_bias=True, use_key_bias=True,
-                                                   use_value_bias=True, use_output_bias=True, key=k1)
+        self.attention = eqx.nn.MultiheadAttention(
+            n_heads, d_model, use_query_bias=True, use_key_bias=True, use_value_bias=True, use_output_bias=True, key=k1
+        )
         self.norm2 = eqx.nn.LayerNorm(d_model)
         self.ff1 = eqx.nn.Linear(d_model, d_ff, key=k2)
         self.ff2 = eqx.nn.Linear(d_ff, d_model, key=k3)
@@ -78,13 +80,25 @@ class WindowTransformer(eqx.Module):
     norm: eqx.nn.LayerNorm
     head: eqx.nn.Linear
 
-    def __init__(self, n_inputs: int, n_outputs: int, window: int, d_model: int, n_heads: int, n_layers: int,
-                 d_ff: int, dropout: float, *, key):
+    def __init__(
+        self,
+        n_inputs: int,
+        n_outputs: int,
+        window: int,
+        d_model: int,
+        n_heads: int,
+        n_layers: int,
+        d_ff: int,
+        dropout: float,
+        *,
+        key,
+    ):
         k_embed, k_pos, k_layers, k_head = jax.random.split(key, 4)
         self.embed = eqx.nn.Linear(n_inputs, d_model, key=k_embed)
         self.position = 0.02 * jax.random.normal(k_pos, (window, d_model))
-        self.layers = [EncoderLayer(d_model, n_heads, d_ff, dropout, key=k)
-                       for k in jax.random.split(k_layers, n_layers)]
+        self.layers = [
+            EncoderLayer(d_model, n_heads, d_ff, dropout, key=k) for k in jax.random.split(k_layers, n_layers)
+        ]
         self.norm = eqx.nn.LayerNorm(d_model)
         self.head = eqx.nn.Linear(d_model, n_outputs // window, key=k_head)
 
@@ -123,14 +137,31 @@ class TransformerDecoder(NeuralSynthesizer):
     """
 
     name = "transformer"
-    _parameter_constraints = dict.fromkeys(["window", "n_layers", "n_heads", "d_model", "d_ff", "window_hop"],
-                                           [Interval(int, 1, None, closed="left")])
+    _parameter_constraints = dict.fromkeys(
+        ["window", "n_layers", "n_heads", "d_model", "d_ff", "window_hop"], [Interval(int, 1, None, closed="left")]
+    )
 
-    def __init__(self, *, window: int = 15, n_layers: int = 4, n_heads: int = 8, d_model: int = 64,
-                 d_ff: int = 128, window_hop: int = 5, dropout: float = 0.1, optimizer: str = "adam",
-                 learning_rate: float = 1e-3, batch_size: int = 64, max_epochs: int = 20, patience: int = 4,
-                 validation_fraction: float = 0.1, encoder: str = "phones", random_state: int | None = 0,
-                 verbose: int = 1, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        window: int = 15,
+        n_layers: int = 4,
+        n_heads: int = 8,
+        d_model: int = 64,
+        d_ff: int = 128,
+        window_hop: int = 5,
+        dropout: float = 0.1,
+        optimizer: str = "adam",
+        learning_rate: float = 1e-3,
+        batch_size: int = 64,
+        max_epochs: int = 20,
+        patience: int = 4,
+        validation_fraction: float = 0.1,
+        encoder: str = "phones",
+        random_state: int | None = 0,
+        verbose: int = 1,
+        unknown_phone: str = "error",
+    ):
         self.window = window
         self.n_layers = n_layers
         self.n_heads = n_heads
@@ -151,21 +182,40 @@ class TransformerDecoder(NeuralSynthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"window": 9, "n_layers": 1, "n_heads": 2, "d_model": 16, "d_ff": 32, "window_hop": 1,
-                 "dropout": 0.0, "max_epochs": 20, "learning_rate": 3e-3, "verbose": 0},
-                {"window": 5, "n_layers": 2, "n_heads": 2, "d_model": 8, "d_ff": 8, "max_epochs": 2,
-                 "verbose": 0}]
+        return [
+            {
+                "window": 9,
+                "n_layers": 1,
+                "n_heads": 2,
+                "d_model": 16,
+                "d_ff": 32,
+                "window_hop": 1,
+                "dropout": 0.0,
+                "max_epochs": 20,
+                "learning_rate": 3e-3,
+                "verbose": 0,
+            },
+            {"window": 5, "n_layers": 2, "n_heads": 2, "d_model": 8, "d_ff": 8, "max_epochs": 2, "verbose": 0},
+        ]
 
     def _check_param_relations(self) -> None:
         if self.d_model % self.n_heads:
-            raise InvalidParameterError(f"{type(self).__name__}: parameter 'd_model' is {self.d_model!r}; it must "
-                                        f"be a multiple of n_heads={self.n_heads}")
+            raise InvalidParameterError(
+                f"{type(self).__name__}: parameter 'd_model' is {self.d_model!r}; it must "
+                f"be a multiple of n_heads={self.n_heads}"
+            )
 
     def _network_spec(self, n_inputs, n_outputs):
-        return WindowTransformer, dict(n_inputs=n_inputs, n_outputs=n_outputs,
-                                       window=int(self.window), d_model=int(self.d_model),
-                                       n_heads=int(self.n_heads), n_layers=int(self.n_layers),
-                                       d_ff=int(self.d_ff), dropout=float(self.dropout))
+        return WindowTransformer, dict(
+            n_inputs=n_inputs,
+            n_outputs=n_outputs,
+            window=int(self.window),
+            d_model=int(self.d_model),
+            n_heads=int(self.n_heads),
+            n_layers=int(self.n_layers),
+            d_ff=int(self.d_ff),
+            dropout=float(self.dropout),
+        )
 
     def _inputs(self, encoder, alignment, n_frames):
         """(n_frames, window, n_features): the per-frame features of every frame's window."""
@@ -174,6 +224,7 @@ class TransformerDecoder(NeuralSynthesizer):
 
     def _samples(self, encoder, utterance, y):
         from dam.corpus import window_targets
+
         X = self._inputs(encoder, utterance, utterance.n_frames)
         Y = window_targets(y, ky=self.window, align="center").astype(np.float32)
         keep = slice(None, None, int(self.window_hop))
@@ -181,5 +232,6 @@ class TransformerDecoder(NeuralSynthesizer):
 
     def _forward(self, network, encoder, alignment, n_frames):
         from dam.corpus import overlap_average
+
         windows = predict_padded(network, self._inputs(encoder, alignment, n_frames))
         return overlap_average(windows, self.window, len(self.channels_), align="center")

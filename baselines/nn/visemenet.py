@@ -51,6 +51,7 @@ Adapted to this toolkit (what differs from the paper):
   trains in minutes on a CPU. Input: the paper's 65 features (13 MFCC, 26
   mel filterbank, 26 subband centroids: encoder ``"mfcc-mfb-ssc"``).
 """
+
 from __future__ import annotations
 
 import equinox as eqx
@@ -67,8 +68,14 @@ from .train import predict_padded
 __all__ = ["VisemeNetwork", "VisemeNet", "LOSS_WEIGHTS"]
 
 #: Weights of the multi-task loss terms (ours: the paper's values are not in our copy).
-LOSS_WEIGHTS = {"phone_group": 1.0, "landmark": 1.0, "landmark_smooth": 0.1, "activation": 1.0, "value": 1.0,
-                "value_smooth": 0.1}
+LOSS_WEIGHTS = {
+    "phone_group": 1.0,
+    "landmark": 1.0,
+    "landmark_smooth": 0.1,
+    "activation": 1.0,
+    "value": 1.0,
+    "value_smooth": 0.1,
+}
 
 
 def _lstm_stack(n_in: int, hidden: int, n_layers: int, key) -> list:
@@ -118,8 +125,20 @@ class VisemeNetwork(eqx.Module):
     n_past: int = eqx.field(static=True)
     n_groups: int = eqx.field(static=True)
 
-    def __init__(self, n_inputs: int, n_outputs: int, n_features: int, n_past: int, n_groups: int,
-                 hidden_size: int, n_layers: int, fc_size: int, dropout: float, *, key):
+    def __init__(
+        self,
+        n_inputs: int,
+        n_outputs: int,
+        n_features: int,
+        n_past: int,
+        n_groups: int,
+        hidden_size: int,
+        n_layers: int,
+        fc_size: int,
+        dropout: float,
+        *,
+        key,
+    ):
         n_channels = (n_outputs - n_groups) // 3
         ks = jax.random.split(key, 7)
         self.shared = _lstm_stack(n_inputs, hidden_size, n_layers, ks[0])
@@ -139,12 +158,15 @@ class VisemeNetwork(eqx.Module):
         n = len(self.shared) + len(self.value_lstm) + len(self.activation_lstm)
         keys = [None] * n if key is None else list(jax.random.split(key, n))
         off = key is None
-        k1, k2, k3 = keys[:len(self.shared)], keys[len(self.shared):-len(self.activation_lstm)], \
-            keys[-len(self.activation_lstm):]
+        k1, k2, k3 = (
+            keys[: len(self.shared)],
+            keys[len(self.shared) : -len(self.activation_lstm)],
+            keys[-len(self.activation_lstm) :],
+        )
         h = _run_stack(self.shared, x, mask, self.dropout, k1, off)
         groups = self.group_head(h)
         landmarks = self.landmark_head(h)
-        current = x[:, self.n_past * self.n_features:(self.n_past + 1) * self.n_features]
+        current = x[:, self.n_past * self.n_features : (self.n_past + 1) * self.n_features]
         v_in = jnp.concatenate([groups, landmarks, current], axis=-1)
         values = self.value_head(_run_stack(self.value_lstm, v_in, mask, self.dropout, k2, off))
         act = self.activation_head(_run_stack(self.activation_lstm, v_in, mask, self.dropout, k3, off))
@@ -154,7 +176,7 @@ class VisemeNetwork(eqx.Module):
 def _split_output(out, n_groups):
     c = (out.shape[-1] - n_groups) // 3
     g = out[..., :n_groups]
-    return g, out[..., n_groups:n_groups + c], out[..., n_groups + c:n_groups + 2 * c], out[..., n_groups + 2 * c:]
+    return g, out[..., n_groups : n_groups + c], out[..., n_groups + c : n_groups + 2 * c], out[..., n_groups + 2 * c :]
 
 
 def _smooth_l1(z, w):
@@ -174,8 +196,8 @@ def _terms(net, xb, yb, wb, key):
     groups, landmarks, act, values = _split_output(out, net.n_groups)
     c = landmarks.shape[-1]
     g_true = yb[..., 0].astype(jnp.int32)
-    y = yb[..., 1:1 + c]
-    a = yb[..., 1 + c:1 + 2 * c]
+    y = yb[..., 1 : 1 + c]
+    a = yb[..., 1 + c : 1 + 2 * c]
     total = jnp.maximum(jnp.sum(wb), 1.0)
     ce = -jnp.take_along_axis(jax.nn.log_softmax(groups, axis=-1), g_true[..., None], axis=-1)[..., 0]
     bce = jnp.mean(jax.nn.softplus(act) - a * act, axis=-1)  # binary cross-entropy from logits
@@ -261,12 +283,30 @@ class VisemeNet(NeuralSynthesizer):
         "gate": ["boolean"],
     }
 
-    def __init__(self, *, n_past: int = 12, n_future: int = 12, hidden_size: int = 64, n_layers: int = 3,
-                 fc_size: int = 64, activation_threshold: float = 0.5, pretrain_epochs: int = 10,
-                 gate: bool = True, seq_len: int = 100, dropout: float = 0.1, optimizer: str = "adam",
-                 learning_rate: float = 3e-3, batch_size: int = 32, max_epochs: int = 30, patience: int = 5,
-                 validation_fraction: float = 0.1, encoder: str = "mfcc-mfb-ssc", random_state: int | None = 0,
-                 verbose: int = 1, unknown_phone: str = "error"):
+    def __init__(
+        self,
+        *,
+        n_past: int = 12,
+        n_future: int = 12,
+        hidden_size: int = 64,
+        n_layers: int = 3,
+        fc_size: int = 64,
+        activation_threshold: float = 0.5,
+        pretrain_epochs: int = 10,
+        gate: bool = True,
+        seq_len: int = 100,
+        dropout: float = 0.1,
+        optimizer: str = "adam",
+        learning_rate: float = 3e-3,
+        batch_size: int = 32,
+        max_epochs: int = 30,
+        patience: int = 5,
+        validation_fraction: float = 0.1,
+        encoder: str = "mfcc-mfb-ssc",
+        random_state: int | None = 0,
+        verbose: int = 1,
+        unknown_phone: str = "error",
+    ):
         self.n_past = n_past
         self.n_future = n_future
         self.hidden_size = hidden_size
@@ -290,31 +330,66 @@ class VisemeNet(NeuralSynthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"n_past": 3, "n_future": 3, "hidden_size": 16, "n_layers": 1, "fc_size": 16, "seq_len": 32,
-                 "dropout": 0.0, "pretrain_epochs": 3, "max_epochs": 30, "learning_rate": 1e-2, "batch_size": 16,
-                 "verbose": 0},
-                {"n_past": 2, "n_future": 1, "hidden_size": 8, "n_layers": 2, "fc_size": 8, "seq_len": 32,
-                 "dropout": 0.0, "pretrain_epochs": 2, "max_epochs": 25, "learning_rate": 1e-2, "batch_size": 16,
-                 "gate": False, "encoder": "mfcc", "verbose": 0}]
+        return [
+            {
+                "n_past": 3,
+                "n_future": 3,
+                "hidden_size": 16,
+                "n_layers": 1,
+                "fc_size": 16,
+                "seq_len": 32,
+                "dropout": 0.0,
+                "pretrain_epochs": 3,
+                "max_epochs": 30,
+                "learning_rate": 1e-2,
+                "batch_size": 16,
+                "verbose": 0,
+            },
+            {
+                "n_past": 2,
+                "n_future": 1,
+                "hidden_size": 8,
+                "n_layers": 2,
+                "fc_size": 8,
+                "seq_len": 32,
+                "dropout": 0.0,
+                "pretrain_epochs": 2,
+                "max_epochs": 25,
+                "learning_rate": 1e-2,
+                "batch_size": 16,
+                "gate": False,
+                "encoder": "mfcc",
+                "verbose": 0,
+            },
+        ]
 
     def _check_param_relations(self) -> None:
         from dam import InvalidParameterError
+
         if "audio" not in self.reads():
-            raise InvalidParameterError(f"VisemeNet: parameter 'encoder' is {self.encoder!r}; VisemeNet reads audio: "
-                                        "use an audio encoder ('mfcc-mfb-ssc', 'mfcc', 'fbank' or 'features')")
+            raise InvalidParameterError(
+                f"VisemeNet: parameter 'encoder' is {self.encoder!r}; VisemeNet reads audio: "
+                "use an audio encoder ('mfcc-mfb-ssc', 'mfcc', 'fbank' or 'features')"
+            )
 
     # -- data -----------------------------------------------------------------
     def _groups_of(self, alignment) -> np.ndarray:
         from dam.corpus import phone_class
+
         index = {g: i for i, g in enumerate(self.phone_groups_)}
         groups = [index.get(phone_class(lab) or "other", index.get("other", 0)) for lab in alignment.labels]
         return np.asarray(groups)[alignment.segment_index(self.frame_rate_)]
 
     def _fit(self, corpus) -> None:
         from dam.corpus import frame_labels, phone_class
+
         self.phone_groups_ = sorted({phone_class(lab) or "other" for a in corpus.alignments for lab in a.labels})
-        sil = np.concatenate([u.trajectory[np.asarray(frame_labels(u.alignment, u.frame_rate, u.n_frames))
-                                           == u.alignment.silence] for u in corpus])
+        sil = np.concatenate(
+            [
+                u.trajectory[np.asarray(frame_labels(u.alignment, u.frame_rate, u.n_frames)) == u.alignment.silence]
+                for u in corpus
+            ]
+        )
         # No silence at all: the corpus mean is the rest.
         self.rest_ = (sil if len(sil) else np.concatenate(corpus.trajectories)).mean(axis=0)
         super()._fit(corpus)
@@ -325,6 +400,7 @@ class VisemeNet(NeuralSynthesizer):
 
     def _inputs(self, encoder, source, n_frames):
         from dam.corpus import window_offsets
+
         F = encoder.frames(source, self.frame_rate_, n_frames)
         k = int(self.n_past) + 1 + int(self.n_future)
         offsets = window_offsets(k, "causal") + int(self.n_future)  # -n_past .. +n_future
@@ -343,7 +419,7 @@ class VisemeNet(NeuralSynthesizer):
         Ws = np.zeros((len(starts), L), np.float32)
         for i, s in enumerate(starts):
             m = min(L, n - s)
-            Xs[i, :m], Ys[i, :m], Ws[i, :m] = X[s:s + m], target[s:s + m], 1.0
+            Xs[i, :m], Ys[i, :m], Ws[i, :m] = X[s : s + m], target[s : s + m], 1.0
         return Xs, Ys, Ws
 
     # -- network and training --------------------------------------------------
@@ -351,14 +427,22 @@ class VisemeNet(NeuralSynthesizer):
         n_channels = len(self.channels_)
         n_groups = len(self.phone_groups_)
         k = int(self.n_past) + 1 + int(self.n_future)
-        return VisemeNetwork, dict(n_inputs=n_inputs, n_outputs=n_groups + 3 * n_channels,
-                                   n_features=n_inputs // k, n_past=int(self.n_past), n_groups=n_groups,
-                                   hidden_size=int(self.hidden_size), n_layers=int(self.n_layers),
-                                   fc_size=int(self.fc_size), dropout=float(self.dropout))
+        return VisemeNetwork, dict(
+            n_inputs=n_inputs,
+            n_outputs=n_groups + 3 * n_channels,
+            n_features=n_inputs // k,
+            n_past=int(self.n_past),
+            n_groups=n_groups,
+            hidden_size=int(self.hidden_size),
+            n_layers=int(self.n_layers),
+            fc_size=int(self.fc_size),
+            dropout=float(self.dropout),
+        )
 
     def _train(self, net, train, val, key, loss=None, max_epochs=None):
         """Pre-training of stages 1-2, then joint training (Sec. 5)."""
         from .train import TrainHistory
+
         k1, k2 = jax.random.split(key)
         pre = TrainHistory(initial_loss=float("nan"))
         if self.pretrain_epochs:
@@ -371,7 +455,7 @@ class VisemeNet(NeuralSynthesizer):
         """Per-control activation thresholds: the best F1 (precision and recall) on the
         validation utterances (the training ones when there are none), on a grid of 0.05..0.95."""
         probs, truth = [], []
-        for u in (val or train):
+        for u in val or train:
             y = (u.trajectory - self.y_mean_) / self.y_scale_
             probs.append(self._parts(self._net, encoder, u, u.n_frames)[2])
             truth.append(self._active(y))
@@ -407,13 +491,18 @@ class VisemeNet(NeuralSynthesizer):
             and ``active`` (n_frames, n_channels; probability above the threshold).
         """
         from dam.corpus import Utterance
+
         self._check_fitted()
         n = (source.alignment if isinstance(source, Utterance) else source).n_frames(self.frame_rate_)
         g, lm, p, v = self._parts(self._network(), self._input_encoder(), source, n)
         g = np.exp(g - g.max(axis=1, keepdims=True))
-        return {"phone_group_probabilities": g / g.sum(axis=1, keepdims=True),
-                "landmarks": lm * self.y_scale_ + self.y_mean_, "values": v * self.y_scale_ + self.y_mean_,
-                "activation_probabilities": p, "active": p > self.thresholds_}
+        return {
+            "phone_group_probabilities": g / g.sum(axis=1, keepdims=True),
+            "landmarks": lm * self.y_scale_ + self.y_mean_,
+            "values": v * self.y_scale_ + self.y_mean_,
+            "activation_probabilities": p,
+            "active": p > self.thresholds_,
+        }
 
     def activation_scores(self, corpus) -> dict:
         """Precision and recall of control activations (Zhou et al.'s Table 1 measures) on ``corpus``.
@@ -430,15 +519,19 @@ class VisemeNet(NeuralSynthesizer):
             st = self.predict_stages(u)
             pred.append(st["active"])
             truth.append(self._active((u.trajectory - self.y_mean_) / self.y_scale_) > 0)
-            g = self._groups_of(u.alignment)[:u.n_frames]
-            right += int(np.sum(st["phone_group_probabilities"].argmax(axis=1)[:len(g)] == g))
+            g = self._groups_of(u.alignment)[: u.n_frames]
+            right += int(np.sum(st["phone_group_probabilities"].argmax(axis=1)[: len(g)] == g))
             total += len(g)
         P, A = np.concatenate(pred), np.concatenate(truth)
-        return {"precision": _ratio((P & A).sum(), P.sum()), "recall": _ratio((P & A).sum(), A.sum()),
-                "per_channel": {c: (_ratio((P[:, i] & A[:, i]).sum(), P[:, i].sum()),
-                                    _ratio((P[:, i] & A[:, i]).sum(), A[:, i].sum()))
-                                for i, c in enumerate(self.channels_)},
-                "phone_group_accuracy": right / max(total, 1)}
+        return {
+            "precision": _ratio((P & A).sum(), P.sum()),
+            "recall": _ratio((P & A).sum(), A.sum()),
+            "per_channel": {
+                c: (_ratio((P[:, i] & A[:, i]).sum(), P[:, i].sum()), _ratio((P[:, i] & A[:, i]).sum(), A[:, i].sum()))
+                for i, c in enumerate(self.channels_)
+            },
+            "phone_group_accuracy": right / max(total, 1),
+        }
 
 
 def _ratio(a, b) -> float:

@@ -1,4 +1,5 @@
 """``python -m dam.cli`` = ``dam``."""
+
 import sys
 
 from dam.cli import main

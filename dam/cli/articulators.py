@@ -2,6 +2,7 @@
 
 Shared by ``dam animate`` and ``dam predict`` through :func:`dam.cli.export.add_export_options`.
 """
+
 from __future__ import annotations
 
 import os
@@ -10,17 +11,27 @@ ARTICULATOR_EXTENSIONS = (".gif", ".mp4", ".html")  # dam.export.articulators.AR
 
 
 def add_articulator_options(p) -> None:
-    g = p.add_argument_group("moving vocal tract (.gif, .mp4 with ffmpeg, .html page with a player; needs "
-                             "VocalTractLab tract parameters, as the default model predicts)")
-    g.add_argument("--fps", type=float, default=25.0, metavar="F",
-                   help="pictures per second of the animation (default 25)")
+    g = p.add_argument_group(
+        "moving vocal tract (.gif, .mp4 with ffmpeg, .html page with a player; needs "
+        "VocalTractLab tract parameters, as the default model predicts)"
+    )
+    g.add_argument(
+        "--fps", type=float, default=25.0, metavar="F", help="pictures per second of the animation (default 25)"
+    )
     g.add_argument("--size", default="640x400", metavar="WxH", help="picture size in pixels (default 640x400)")
-    g.add_argument("--compare", metavar="MODEL_FILE", action="append", default=[],
-                   help="draw this model's prediction for the same phones beside it ('default' for the shipped "
-                        "model); repeatable")
-    g.add_argument("--truth", metavar="TRAJECTORY",
-                   help="draw recorded controls beside it (.csv/.npy/EST track with the same channels), e.g. the "
-                        "utterance of the corpus whose alignment is animated")
+    g.add_argument(
+        "--compare",
+        metavar="MODEL_FILE",
+        action="append",
+        default=[],
+        help="draw this model's prediction for the same phones beside it ('default' for the shipped model); repeatable",
+    )
+    g.add_argument(
+        "--truth",
+        metavar="TRAJECTORY",
+        help="draw recorded controls beside it (.csv/.npy/EST track with the same channels), e.g. the "
+        "utterance of the corpus whose alignment is animated",
+    )
 
 
 def _size(text: str):
@@ -46,17 +57,24 @@ def check_articulator_options(parser, args, output: str) -> None:
 def articulator_options(args, channels, frame_rate, n_frames, alignment) -> dict:
     """The options of :func:`dam.export.articulators.write_articulators` from the command line."""
     from dam.corpus import DataError
+
     compare = []
     for spec in args.compare:
         from dam.speech.animation import _resolve_model
+
         model, name = _resolve_model(spec)
         if list(model.channels_) != list(channels):
-            raise DataError(spec, "channels", list(model.channels_), "the --compare model predicts other channels "
-                            "than the animated one")
+            raise DataError(
+                spec,
+                "channels",
+                list(model.channels_),
+                "the --compare model predicts other channels than the animated one",
+            )
         compare.append(("default" if spec == "default" else os.path.basename(name), model.predict(alignment)))
     if args.truth:
         from dam.corpus.io import read_trajectory
         from dam.export.articulators import controls_at
+
         data, names, fr = read_trajectory(args.truth)
         if names is not None:
             missing = [c for c in channels if c not in names]

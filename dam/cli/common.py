@@ -1,4 +1,5 @@
 """Helpers every command shares: corpus names, ``--param`` values, messages on standard error."""
+
 from __future__ import annotations
 
 import argparse
@@ -11,6 +12,7 @@ __all__ = ["corpus_arg", "parse_param", "info"]
 def corpus_arg(spec):
     """A corpus directory or a bundled corpus name (``tiny``, ``vtl:train``) as a Corpus."""
     from dam.datasets import resolve
+
     return resolve(spec)
 
 

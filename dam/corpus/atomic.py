@@ -19,6 +19,7 @@ directory that holds other files is replaced only when asked (``overwrite``).
 This module is on the ground floor: it imports nothing else from dam except
 :class:`dam.corpus.data.DataError`.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -30,8 +31,7 @@ from typing import IO
 
 from dam.corpus.data import DataError
 
-__all__ = ["atomic_write", "atomic_path", "atomic_directory", "check_output", "OutputPathError",
-           "TEMP_PREFIX"]
+__all__ = ["atomic_write", "atomic_path", "atomic_directory", "check_output", "OutputPathError", "TEMP_PREFIX"]
 
 #: Temporary files start with this (plus the destination's name), so a file left by a
 #: process killed before its rename is recognisable and never mistaken for the output.
@@ -59,8 +59,7 @@ def _fsync_dir(directory: str) -> None:
 def _temp_name(path: str, *, directory: bool = False) -> str:
     d = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(d):
-        raise OutputPathError(path, "directory", d, "the output directory does not exist",
-                              "create it first")
+        raise OutputPathError(path, "directory", d, "the output directory does not exist", "create it first")
     base = TEMP_PREFIX + os.path.basename(path) + "-"
     if directory:
         return tempfile.mkdtemp(dir=d, prefix=base)
@@ -129,8 +128,7 @@ def _keep_mode(path: str, tmp: str) -> None:
 
 
 @contextlib.contextmanager
-def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8",
-                 newline: str | None = None) -> Iterator[IO]:
+def atomic_write(path, mode: str = "w", *, encoding: str | None = "utf-8", newline: str | None = None) -> Iterator[IO]:
     """Open a temporary file that atomically replaces ``path`` when the block succeeds.
 
     Parameters
@@ -198,8 +196,13 @@ def atomic_directory(path, *, overwrite: bool = False) -> Iterator[str]:
         if not os.path.isdir(path):
             raise OutputPathError(path, "output", path, "exists and is not a directory")
         if os.listdir(path) and not overwrite:
-            raise OutputPathError(path, "output", path, "the directory exists and is not empty",
-                                  "choose a new directory or pass overwrite (--overwrite) to replace it")
+            raise OutputPathError(
+                path,
+                "output",
+                path,
+                "the directory exists and is not empty",
+                "choose a new directory or pass overwrite (--overwrite) to replace it",
+            )
     tmp = _temp_name(path, directory=True)
     old = None
     try:
@@ -248,8 +251,15 @@ def _inside(path: str, directory: str) -> bool:
     return os.path.commonpath([p, d]) == d
 
 
-def check_output(path, *, inputs: Iterable = (), directory: bool = False, overwrite: bool = False,
-                 merge: bool = False, option: str = "-o") -> str:
+def check_output(
+    path,
+    *,
+    inputs: Iterable = (),
+    directory: bool = False,
+    overwrite: bool = False,
+    merge: bool = False,
+    option: str = "-o",
+) -> str:
     """Check an output path before any work starts; return it as a string.
 
     Parameters
@@ -305,14 +315,17 @@ def check_output(path, *, inputs: Iterable = (), directory: bool = False, overwr
         if not os.path.exists(s):
             continue
         if _same(p, s):
-            raise OutputPathError(p, option, p, f"is an input of this command ({s})",
-                                  "write the output elsewhere")
+            raise OutputPathError(p, option, p, f"is an input of this command ({s})", "write the output elsewhere")
         if os.path.isdir(s) and _inside(p, s):
-            raise OutputPathError(p, option, p, f"lies inside the input directory {s}",
-                                  "write the output elsewhere")
+            raise OutputPathError(p, option, p, f"lies inside the input directory {s}", "write the output elsewhere")
         if directory and not merge and _inside(s, p):
-            raise OutputPathError(p, option, p, f"holds the input {s}, which writing this directory would replace",
-                                  "write the output elsewhere")
+            raise OutputPathError(
+                p,
+                option,
+                p,
+                f"holds the input {s}, which writing this directory would replace",
+                "write the output elsewhere",
+            )
     parent = os.path.dirname(os.path.abspath(p))
     if not os.path.isdir(parent):
         raise OutputPathError(p, option, parent, "the output directory does not exist", "create it first")
@@ -322,19 +335,33 @@ def check_output(path, *, inputs: Iterable = (), directory: bool = False, overwr
         if os.path.isdir(p) and not overwrite:
             names = os.listdir(p)
             if merge:
-                corpus = [n for n in sorted(names) if n == "corpus.json"
-                          or os.path.splitext(n)[1].lower() in (".textgrid", ".lab", ".par")]
+                corpus = [
+                    n
+                    for n in sorted(names)
+                    if n == "corpus.json" or os.path.splitext(n)[1].lower() in (".textgrid", ".lab", ".par")
+                ]
                 if corpus:
-                    raise OutputPathError(p, option, p, f"the directory holds a corpus ({corpus[0]} ...)",
-                                          "choose another directory or pass --overwrite")
+                    raise OutputPathError(
+                        p,
+                        option,
+                        p,
+                        f"the directory holds a corpus ({corpus[0]} ...)",
+                        "choose another directory or pass --overwrite",
+                    )
             elif names:
-                raise OutputPathError(p, option, p, "the directory exists and holds files",
-                                      "choose a new directory or pass --overwrite to replace it")
+                raise OutputPathError(
+                    p,
+                    option,
+                    p,
+                    "the directory exists and holds files",
+                    "choose a new directory or pass --overwrite to replace it",
+                )
     elif os.path.isdir(p):
         raise OutputPathError(p, option, p, "is a directory; give a file name")
     elif os.path.isfile(p) and not overwrite and _corpus_member(p):
-        raise OutputPathError(p, option, p, "is a file of the corpus in its directory (recorded data)",
-                              "write the output elsewhere")
+        raise OutputPathError(
+            p, option, p, "is a file of the corpus in its directory (recorded data)", "write the output elsewhere"
+        )
     return p
 
 
@@ -351,8 +378,13 @@ def _corpus_member(path: str) -> bool:
         return True
     stem, suffix = os.path.splitext(name)
     suffix = suffix.lower()
-    partners = (_TRAJECTORY_SUFFIXES if suffix in _ALIGNMENT_SUFFIXES
-                else _ALIGNMENT_SUFFIXES if suffix in _TRAJECTORY_SUFFIXES else ())
+    partners = (
+        _TRAJECTORY_SUFFIXES
+        if suffix in _ALIGNMENT_SUFFIXES
+        else _ALIGNMENT_SUFFIXES
+        if suffix in _TRAJECTORY_SUFFIXES
+        else ()
+    )
     d = os.path.dirname(os.path.abspath(path))
     try:
         siblings = {os.path.splitext(n)[0] + os.path.splitext(n)[1].lower() for n in os.listdir(d)}

@@ -27,12 +27,12 @@ Conventions
   trailing silence; an alignment running more than two frames past the
   last frame time is an error.
 """
+
 from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
-from typing import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -46,8 +46,17 @@ MAX_DURATION = 86400.0
 MAX_FRAME_RATE = 10000.0
 
 __all__ = [
-    "SILENCE", "SILENCE_LABELS", "DataError", "Alignment", "Utterance", "Corpus",
-    "frame_times", "frame_labels", "fill_masked", "infer_sensors", "resolve_sensors",
+    "SILENCE",
+    "SILENCE_LABELS",
+    "DataError",
+    "Alignment",
+    "Utterance",
+    "Corpus",
+    "frame_times",
+    "frame_labels",
+    "fill_masked",
+    "infer_sensors",
+    "resolve_sensors",
     "fit_to_frames",
 ]
 
@@ -93,13 +102,19 @@ def real_array(values, source, field_: str) -> np.ndarray:
     dam.corpus.data.DataError: u.csv: field 'trajectory': must be an array of real numbers ...
     """
     import warnings
+
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", _ComplexWarning)
             raw = np.asarray(values)
             if raw.dtype.kind == "c":
-                raise DataError(source, field_, str(raw.dtype), "complex values are not accepted",
-                                "store the real quantity you mean (e.g. np.abs or .real)")
+                raise DataError(
+                    source,
+                    field_,
+                    str(raw.dtype),
+                    "complex values are not accepted",
+                    "store the real quantity you mean (e.g. np.abs or .real)",
+                )
             if raw.dtype.kind not in "biufO":
                 raise TypeError(raw.dtype)
             return np.array(raw, dtype=float, copy=True)
@@ -108,11 +123,15 @@ def real_array(values, source, field_: str) -> np.ndarray:
     except (TypeError, ValueError, OverflowError, _ComplexWarning) as exc:
         kind = "out of range" if isinstance(exc, OverflowError) else "ragged, complex or not numbers"
         shown = repr(values)
-        raise DataError(source, field_, shown if len(shown) <= 80 else shown[:77] + "...",
-                        f"must be an array of real numbers ({kind})") from None
+        raise DataError(
+            source,
+            field_,
+            shown if len(shown) <= 80 else shown[:77] + "...",
+            f"must be an array of real numbers ({kind})",
+        ) from None
 
 
-_ComplexWarning = getattr(getattr(np, "exceptions", np), "ComplexWarning")
+_ComplexWarning = getattr(np, "exceptions", np).ComplexWarning
 
 
 def _n_frames(duration: float, frame_rate: float) -> int:
@@ -158,47 +177,61 @@ class Alignment:
 
     __slots__ = ("labels", "starts", "ends", "source", "silence")
 
-    def __init__(self, labels: Sequence[str], starts, ends, *, source: str | None = None,
-                 silence: str = SILENCE):
+    def __init__(self, labels: Sequence[str], starts, ends, *, source: str | None = None, silence: str = SILENCE):
         labels = [canonical_label(lab, silence) for lab in labels]
         starts = real_array(starts, source, "starts").ravel()  # copies: snapped below, frozen after
         ends = real_array(ends, source, "ends").ravel()
         if not (len(labels) == len(starts) == len(ends)):
-            raise DataError(source, "segments", (len(labels), len(starts), len(ends)),
-                            "labels, starts and ends differ in length")
+            raise DataError(
+                source, "segments", (len(labels), len(starts), len(ends)), "labels, starts and ends differ in length"
+            )
         if len(labels) == 0:
             raise DataError(source, "segments", 0, "the alignment has no segments")
         for name, arr in (("start", starts), ("end", ends)):
             bad = np.flatnonzero(~np.isfinite(arr))
             if bad.size:
                 i = int(bad[0])
-                raise DataError(source, f"segment {i} ({labels[i]!r}) {name}", float(arr[i]),
-                                "time is not finite")
+                raise DataError(source, f"segment {i} ({labels[i]!r}) {name}", float(arr[i]), "time is not finite")
             bad = np.flatnonzero(np.abs(arr) > MAX_DURATION)
             if bad.size:
                 i = int(bad[0])
-                raise DataError(source, f"segment {i} ({labels[i]!r}) {name}", float(arr[i]),
-                                f"time is more than {MAX_DURATION:g} s (a day): a misread unit?",
-                                "split the recording into utterances")
+                raise DataError(
+                    source,
+                    f"segment {i} ({labels[i]!r}) {name}",
+                    float(arr[i]),
+                    f"time is more than {MAX_DURATION:g} s (a day): a misread unit?",
+                    "split the recording into utterances",
+                )
         if starts[0] < -TIME_TOL:
-            raise DataError(source, f"segment 0 ({labels[0]!r}) start", float(starts[0]),
-                            "time is negative")
+            raise DataError(source, f"segment 0 ({labels[0]!r}) start", float(starts[0]), "time is negative")
         length = ends - starts
         bad = np.flatnonzero(length <= TIME_TOL)
         if bad.size:
             i = int(bad[0])
-            raise DataError(source, f"segment {i} ({labels[i]!r})", (float(starts[i]), float(ends[i])),
-                            "zero-length or reversed segment (start >= end)")
+            raise DataError(
+                source,
+                f"segment {i} ({labels[i]!r})",
+                (float(starts[i]), float(ends[i])),
+                "zero-length or reversed segment (start >= end)",
+            )
         back = np.flatnonzero(starts[1:] < starts[:-1])
         if back.size:
             i = int(back[0]) + 1
-            raise DataError(source, f"segment {i} ({labels[i]!r}) start", float(starts[i]),
-                            f"times are not sorted (previous segment starts at {starts[i - 1]:g})")
+            raise DataError(
+                source,
+                f"segment {i} ({labels[i]!r}) start",
+                float(starts[i]),
+                f"times are not sorted (previous segment starts at {starts[i - 1]:g})",
+            )
         over = np.flatnonzero(starts[1:] < ends[:-1] - TIME_TOL)
         if over.size:
             i = int(over[0]) + 1
-            raise DataError(source, f"segment {i} ({labels[i]!r}) start", float(starts[i]),
-                            f"overlaps the previous segment {labels[i - 1]!r}, which ends at {ends[i - 1]:g}")
+            raise DataError(
+                source,
+                f"segment {i} ({labels[i]!r}) start",
+                float(starts[i]),
+                f"overlaps the previous segment {labels[i - 1]!r}, which ends at {ends[i - 1]:g}",
+            )
         # Gaps (including one before the first segment) become silence segments.
         prev_end = np.concatenate([[0.0], ends[:-1]])
         gap = np.flatnonzero(starts > prev_end + TIME_TOL)
@@ -209,7 +242,7 @@ class Alignment:
                 ins_s.append(prev_end[i])
                 ins_e.append(starts[i])
             new_labels = list(labels)
-            for k, (i, lab) in enumerate(reversed(ins_lab)):
+            for _k, (i, lab) in enumerate(reversed(ins_lab)):
                 new_labels.insert(i, lab)
             labels = new_labels
             starts = np.insert(starts, gap, ins_s)
@@ -236,9 +269,12 @@ class Alignment:
         return f"Alignment({len(self)} segments, {self.duration:.3f} s{src})"
 
     def __eq__(self, other) -> bool:
-        return (isinstance(other, Alignment) and self.labels == other.labels
-                and np.allclose(self.starts, other.starts, atol=TIME_TOL)
-                and np.allclose(self.ends, other.ends, atol=TIME_TOL))
+        return (
+            isinstance(other, Alignment)
+            and self.labels == other.labels
+            and np.allclose(self.starts, other.starts, atol=TIME_TOL)
+            and np.allclose(self.ends, other.ends, atol=TIME_TOL)
+        )
 
     __hash__ = None
 
@@ -259,32 +295,38 @@ class Alignment:
         """Number of frames ``i`` with ``i / frame_rate <= duration`` (see the module's conventions)."""
         return _n_frames(self.duration, frame_rate)
 
-    def shifted(self, seconds: float) -> "Alignment":
+    def shifted(self, seconds: float) -> Alignment:
         """The same segments ``seconds`` later; the new leading gap is silence."""
         if seconds < 0:
             raise DataError(self.source, "shift", seconds, "must be non-negative")
-        return Alignment(self.labels, self.starts + seconds, self.ends + seconds,
-                         source=self.source, silence=self.silence)
+        return Alignment(
+            self.labels, self.starts + seconds, self.ends + seconds, source=self.source, silence=self.silence
+        )
 
-    def with_end(self, end: float) -> "Alignment":
+    def with_end(self, end: float) -> Alignment:
         """Extend with trailing silence, or trim the last segment, to end at ``end``."""
         if end > self.duration + TIME_TOL:
-            return Alignment(self.labels + (self.silence,), np.append(self.starts, self.duration),
-                             np.append(self.ends, end), source=self.source, silence=self.silence)
+            return Alignment(
+                self.labels + (self.silence,),
+                np.append(self.starts, self.duration),
+                np.append(self.ends, end),
+                source=self.source,
+                silence=self.silence,
+            )
         if end < self.duration - TIME_TOL:
             if end <= self.starts[-1] + TIME_TOL:
-                raise DataError(self.source, "end", end,
-                                f"trimming would remove the last segment {self.labels[-1]!r}")
+                raise DataError(self.source, "end", end, f"trimming would remove the last segment {self.labels[-1]!r}")
             ends = self.ends.copy()
             ends[-1] = end
             return Alignment(self.labels, self.starts, ends, source=self.source, silence=self.silence)
         return self
 
-    def relabel(self, mapping) -> "Alignment":
+    def relabel(self, mapping) -> Alignment:
         """Return a copy with labels mapped through ``mapping`` (dict or callable)."""
         f = mapping if callable(mapping) else (lambda x: mapping.get(x, x))
-        return Alignment([f(lab) for lab in self.labels], self.starts, self.ends,
-                         source=self.source, silence=self.silence)
+        return Alignment(
+            [f(lab) for lab in self.labels], self.starts, self.ends, source=self.source, silence=self.silence
+        )
 
     def segment_index(self, frame_rate: float, n_frames: int | None = None) -> np.ndarray:
         """Index of the segment each frame falls in, shape (n_frames,)."""
@@ -341,9 +383,18 @@ class Utterance:
 
     __slots__ = ("alignment", "trajectory", "frame_rate", "channels", "audio", "name", "mask")
 
-    def __init__(self, alignment: Alignment, trajectory, frame_rate: float,
-                 channels: Sequence[str], *, audio: str | None = None, name: str | None = None,
-                 source: str | None = None, mask=None):
+    def __init__(
+        self,
+        alignment: Alignment,
+        trajectory,
+        frame_rate: float,
+        channels: Sequence[str],
+        *,
+        audio: str | None = None,
+        name: str | None = None,
+        source: str | None = None,
+        mask=None,
+    ):
         if not isinstance(alignment, Alignment):
             raise TypeError(f"{source or '<input>'}: alignment must be an Alignment, got {type(alignment).__name__}")
         source = source or alignment.source
@@ -352,8 +403,12 @@ class Utterance:
         except (TypeError, ValueError):
             raise DataError(source, "frame_rate", frame_rate, "not a number") from None
         if not (math.isfinite(fr) and 0 < fr <= MAX_FRAME_RATE):
-            raise DataError(source, "frame_rate", frame_rate,
-                            f"must be a positive finite number of at most {MAX_FRAME_RATE:g} frames/s")
+            raise DataError(
+                source,
+                "frame_rate",
+                frame_rate,
+                f"must be a positive finite number of at most {MAX_FRAME_RATE:g} frames/s",
+            )
         traj = real_array(trajectory, source, "trajectory")
         if traj.ndim == 1:
             traj = traj[:, None]
@@ -363,8 +418,12 @@ class Utterance:
             raise DataError(source, "channels", channels, "must be a sequence of channel names")
         channels = tuple(str(c) for c in channels)
         if len(channels) != traj.shape[1]:
-            raise DataError(source, "channels", len(channels),
-                            f"the trajectory has {traj.shape[1]} columns but {len(channels)} channel names")
+            raise DataError(
+                source,
+                "channels",
+                len(channels),
+                f"the trajectory has {traj.shape[1]} columns but {len(channels)} channel names",
+            )
         if len(set(channels)) != len(channels):
             dup = next(c for c in channels if channels.count(c) > 1)
             raise DataError(source, "channels", dup, "duplicate channel name")
@@ -376,9 +435,13 @@ class Utterance:
         bad = np.argwhere(~np.isfinite(traj) & (True if mask is None else mask))
         if bad.size:
             i, j = (int(v) for v in bad[0])
-            raise DataError(source, f"trajectory[{i}, {channels[j]!r}] (frame {i}, t={i / fr:.3f} s)",
-                            float(traj[i, j]), "value is not finite",
-                            f"{len(bad)} non-finite value(s) in all; interpolate or drop them before loading")
+            raise DataError(
+                source,
+                f"trajectory[{i}, {channels[j]!r}] (frame {i}, t={i / fr:.3f} s)",
+                float(traj[i, j]),
+                "value is not finite",
+                f"{len(bad)} non-finite value(s) in all; interpolate or drop them before loading",
+            )
         n = traj.shape[0]
         if n == 0:
             raise DataError(source, "trajectory", traj.shape, "the trajectory has no frames")
@@ -396,8 +459,10 @@ class Utterance:
         self.name = name or (_stem(alignment.source) if alignment.source else None)
 
     def __repr__(self) -> str:
-        return (f"Utterance({self.name!r}, {len(self.alignment)} segments, "
-                f"{self.n_frames} frames x {self.n_channels} channels @ {self.frame_rate:g} Hz)")
+        return (
+            f"Utterance({self.name!r}, {len(self.alignment)} segments, "
+            f"{self.n_frames} frames x {self.n_channels} channels @ {self.frame_rate:g} Hz)"
+        )
 
     @property
     def n_frames(self) -> int:
@@ -411,16 +476,25 @@ class Utterance:
     def duration(self) -> float:
         return self.n_frames / self.frame_rate
 
-    def replace(self, **changes) -> "Utterance":
+    def replace(self, **changes) -> Utterance:
         """A copy with some fields replaced (``alignment``, ``trajectory``, ...)."""
-        kw = dict(alignment=self.alignment, trajectory=self.trajectory, frame_rate=self.frame_rate,
-                  channels=self.channels, audio=self.audio, name=self.name, mask=self.mask)
-        if "mask" not in changes and self.mask is not None and \
-                np.shape(changes.get("trajectory", self.trajectory)) != self.mask.shape:
+        kw = dict(
+            alignment=self.alignment,
+            trajectory=self.trajectory,
+            frame_rate=self.frame_rate,
+            channels=self.channels,
+            audio=self.audio,
+            name=self.name,
+            mask=self.mask,
+        )
+        if (
+            "mask" not in changes
+            and self.mask is not None
+            and np.shape(changes.get("trajectory", self.trajectory)) != self.mask.shape
+        ):
             kw["mask"] = None  # a trajectory of another shape: the old mask cannot describe it
         kw.update(changes)
-        alignment, trajectory, fr, channels = (kw.pop(k) for k in ("alignment", "trajectory",
-                                                                   "frame_rate", "channels"))
+        alignment, trajectory, fr, channels = (kw.pop(k) for k in ("alignment", "trajectory", "frame_rate", "channels"))
         return Utterance(alignment, trajectory, fr, channels, **kw)
 
 
@@ -429,8 +503,8 @@ def _merge_silences(labels, starts, ends, silence):
     sil = np.array([lab == silence for lab in labels])
     if len(labels) < 2 or not np.any(sil[1:] & sil[:-1]):
         return labels, starts, ends
-    keep = ~np.r_[False, sil[1:] & sil[:-1]]          # first of every run of silences
-    last = np.r_[~(sil[1:] & sil[:-1]), True]         # last of every run
+    keep = ~np.r_[False, sil[1:] & sil[:-1]]  # first of every run of silences
+    last = np.r_[~(sil[1:] & sil[:-1]), True]  # last of every run
     return ([lab for lab, k in zip(labels, keep) if k], starts[keep], ends[last])
 
 
@@ -462,13 +536,20 @@ def fit_to_frames(alignment: Alignment, n_frames: int, frame_rate: float, source
     last = (n_frames - 1) / frame_rate
     frame = 1.0 / frame_rate
     if a.duration > last + 2 * frame + TIME_TOL:
-        raise DataError(source, "trajectory", f"{n_frames} frames",
-                        f"shorter than its alignment, which needs {a.n_frames(frame_rate)} frames "
-                        f"({a.duration:.3f} s at {frame_rate:g} frames/s)")
+        raise DataError(
+            source,
+            "trajectory",
+            f"{n_frames} frames",
+            f"shorter than its alignment, which needs {a.n_frames(frame_rate)} frames "
+            f"({a.duration:.3f} s at {frame_rate:g} frames/s)",
+        )
     labels, starts, ends = list(a.labels), a.starts.copy(), a.ends.copy()
-    short = [j for j, lab in enumerate(labels)
-             if lab == a.silence and ends[j] - starts[j] < frame - TIME_TOL and len(labels) > 1]
-    for j in reversed(short):          # into the previous segment (the next one for the first)
+    short = [
+        j
+        for j, lab in enumerate(labels)
+        if lab == a.silence and ends[j] - starts[j] < frame - TIME_TOL and len(labels) > 1
+    ]
+    for j in reversed(short):  # into the previous segment (the next one for the first)
         if j > 0:
             ends[j - 1] = ends[j]
         else:
@@ -476,18 +557,19 @@ def fit_to_frames(alignment: Alignment, n_frames: int, frame_rate: float, source
         del labels[j]
         starts, ends = np.delete(starts, j), np.delete(ends, j)
     end = ends[-1]
-    if end >= last + frame - TIME_TOL:                 # overhang: trim to the last frame time
+    if end >= last + frame - TIME_TOL:  # overhang: trim to the last frame time
         keep = starts < last - TIME_TOL
         if not keep.any():
-            raise DataError(source, "trajectory", f"{n_frames} frames",
-                            f"the alignment starts after the last frame ({last:.3f} s)")
+            raise DataError(
+                source, "trajectory", f"{n_frames} frames", f"the alignment starts after the last frame ({last:.3f} s)"
+            )
         labels = [lab for lab, k in zip(labels, keep) if k]
         starts, ends = starts[keep], ends[keep]
         ends[-1] = last
-    elif end < last - frame + TIME_TOL:                # a real pause: trailing silence
+    elif end < last - frame + TIME_TOL:  # a real pause: trailing silence
         labels.append(a.silence)
         starts, ends = np.append(starts, end), np.append(ends, last)
-    elif end < last - TIME_TOL:                        # a sub-frame gap: absorbed
+    elif end < last - TIME_TOL:  # a sub-frame gap: absorbed
         ends[-1] = last
     if not short and len(labels) == len(a) and np.array_equal(ends, a.ends):
         return a
@@ -525,6 +607,7 @@ def fill_masked(trajectory, mask) -> np.ndarray:
 
 def _stem(path: str) -> str:
     import os
+
     return os.path.splitext(os.path.basename(str(path)))[0]
 
 
@@ -552,12 +635,17 @@ class Corpus:
     (100.0, 4)
     """
 
-    def __init__(self, utterances: Iterable[Utterance], *, name: str | None = None,
-                 metadata: dict | None = None, source: str | None = None):
+    def __init__(
+        self,
+        utterances: Iterable[Utterance],
+        *,
+        name: str | None = None,
+        metadata: dict | None = None,
+        source: str | None = None,
+    ):
         utts = list(utterances)
         if not utts:
-            raise DataError(source, "utterances", 0, "the corpus is empty",
-                            "a corpus needs at least one utterance")
+            raise DataError(source, "utterances", 0, "the corpus is empty", "a corpus needs at least one utterance")
         for k, u in enumerate(utts):
             if not isinstance(u, Utterance):
                 raise TypeError(f"{source or '<corpus>'}: item {k} is a {type(u).__name__}, not an Utterance")
@@ -565,14 +653,23 @@ class Corpus:
         for u in utts[1:]:
             where = u.alignment.source or u.name or source
             if abs(u.frame_rate - ref.frame_rate) > 1e-9 * ref.frame_rate:
-                raise DataError(where, "frame_rate", u.frame_rate,
-                                f"differs from the corpus frame rate {ref.frame_rate:g} (of {ref.name!r})")
+                raise DataError(
+                    where,
+                    "frame_rate",
+                    u.frame_rate,
+                    f"differs from the corpus frame rate {ref.frame_rate:g} (of {ref.name!r})",
+                )
             if u.channels != ref.channels:
                 if len(u.channels) != len(ref.channels):
-                    raise DataError(where, "channels", len(u.channels),
-                                    f"channel count differs from {len(ref.channels)} in {ref.name!r}")
-                raise DataError(where, "channels", u.channels,
-                                f"channel names differ from {ref.channels} in {ref.name!r}")
+                    raise DataError(
+                        where,
+                        "channels",
+                        len(u.channels),
+                        f"channel count differs from {len(ref.channels)} in {ref.name!r}",
+                    )
+                raise DataError(
+                    where, "channels", u.channels, f"channel names differ from {ref.channels} in {ref.name!r}"
+                )
         self.utterances = utts
         self.name = name
         self.metadata = dict(metadata or {})
@@ -597,8 +694,10 @@ class Corpus:
 
     def __repr__(self) -> str:
         nm = f"{self.name!r}, " if self.name else ""
-        return (f"Corpus({nm}{len(self)} utterances, {self.duration / 60:.1f} min, "
-                f"{len(self.channels)} channels @ {self.frame_rate:g} Hz, {len(self.phones)} phones)")
+        return (
+            f"Corpus({nm}{len(self)} utterances, {self.duration / 60:.1f} min, "
+            f"{len(self.channels)} channels @ {self.frame_rate:g} Hz, {len(self.phones)} phones)"
+        )
 
     # -- shared properties -----------------------------------------------
     @property
@@ -651,29 +750,41 @@ class Corpus:
     def duration(self) -> float:
         return sum(u.duration for u in self.utterances)
 
-    def select_channels(self, channels: Sequence[str]) -> "Corpus":
+    def select_channels(self, channels: Sequence[str]) -> Corpus:
         """A corpus with only ``channels``, in that order (names must exist)."""
         names = list(self.channels)
         missing = [c for c in channels if c not in names]
         if missing or not channels:
-            raise DataError(self.source, "channels", missing or list(channels),
-                            "not channels of this corpus" if missing else "no channels selected",
-                            f"its channels are {names}")
+            raise DataError(
+                self.source,
+                "channels",
+                missing or list(channels),
+                "not channels of this corpus" if missing else "no channels selected",
+                f"its channels are {names}",
+            )
         cols = [names.index(c) for c in channels]
         meta = dict(self.metadata)
         if isinstance(meta.get("sensors"), dict):  # keep the sensors whose channels all remain
             meta["sensors"] = {k: v for k, v in meta["sensors"].items() if set(v) <= set(channels)}
-        return Corpus([u.replace(trajectory=u.trajectory[:, cols], channels=list(channels),
-                                 mask=None if u.mask is None else u.mask[:, cols]) for u in self],
-                      name=self.name, metadata=meta, source=self.source)
+        return Corpus(
+            [
+                u.replace(
+                    trajectory=u.trajectory[:, cols],
+                    channels=list(channels),
+                    mask=None if u.mask is None else u.mask[:, cols],
+                )
+                for u in self
+            ],
+            name=self.name,
+            metadata=meta,
+            source=self.source,
+        )
 
     # -- splitting ---------------------------------------------------------
-    def subset(self, indices) -> "Corpus":
-        return Corpus([self.utterances[i] for i in indices], name=self.name,
-                      metadata=self.metadata, source=self.source)
+    def subset(self, indices) -> Corpus:
+        return Corpus([self.utterances[i] for i in indices], name=self.name, metadata=self.metadata, source=self.source)
 
-    def train_test_split(self, test_size: float | int = 0.2, *, random_state: int | None = 0
-                         ) -> tuple["Corpus", "Corpus"]:
+    def train_test_split(self, test_size: float | int = 0.2, *, random_state: int | None = 0) -> tuple[Corpus, Corpus]:
         """Utterance-level split; both parts keep at least one utterance."""
         n = len(self)
         if n < 2:
@@ -683,8 +794,9 @@ class Corpus:
         perm = np.random.default_rng(random_state).permutation(n)
         return self.subset(sorted(perm[n_test:])), self.subset(sorted(perm[:n_test]))
 
-    def kfold(self, n_splits: int = 5, *, shuffle: bool = True, random_state: int | None = 0
-              ) -> Iterator[tuple["Corpus", "Corpus"]]:
+    def kfold(
+        self, n_splits: int = 5, *, shuffle: bool = True, random_state: int | None = 0
+    ) -> Iterator[tuple[Corpus, Corpus]]:
         """Yield ``(train, test)`` corpora for utterance-level K-fold cross-validation."""
         n = len(self)
         if not 2 <= n_splits <= n:
@@ -747,12 +859,16 @@ def infer_sensors(channels: Sequence[str]) -> dict[str, tuple[str, ...]]:
             axes["?"] = name
         else:
             axes[axis] = name
-    return {s: tuple(axes[a] for a in "xyz" if a in axes) for s, axes in groups.items()
-            if "?" not in axes and len(axes) >= 2}
+    return {
+        s: tuple(axes[a] for a in "xyz" if a in axes)
+        for s, axes in groups.items()
+        if "?" not in axes and len(axes) >= 2
+    }
 
 
-def resolve_sensors(channels: Sequence[str], given: Mapping | None = None, *,
-                    source: str | None = None) -> dict[str, tuple[str, ...]]:
+def resolve_sensors(
+    channels: Sequence[str], given: Mapping | None = None, *, source: str | None = None
+) -> dict[str, tuple[str, ...]]:
     """The sensors of a corpus: ``given`` (from ``corpus.json``) if any, else inferred.
 
     Parameters
@@ -772,8 +888,12 @@ def resolve_sensors(channels: Sequence[str], given: Mapping | None = None, *,
     if given is None:
         return infer_sensors(channels)
     if not isinstance(given, Mapping):
-        raise DataError(source, "sensors", type(given).__name__,
-                        'must map sensor names to lists of channels, e.g. {"TT": ["tt_x", "tt_y"]}')
+        raise DataError(
+            source,
+            "sensors",
+            type(given).__name__,
+            'must map sensor names to lists of channels, e.g. {"TT": ["tt_x", "tt_y"]}',
+        )
     names = set(channels)
     seen: dict[str, str] = {}
     out: dict[str, tuple[str, ...]] = {}
@@ -782,8 +902,13 @@ def resolve_sensors(channels: Sequence[str], given: Mapping | None = None, *,
             raise DataError(source, f"sensors[{sensor!r}]", chans, "a sensor is a list of 2 or 3 channels")
         for c in chans:
             if c not in names:
-                raise DataError(source, f"sensors[{sensor!r}]", c, "not a channel of this corpus",
-                                f"its channels are {list(channels)}")
+                raise DataError(
+                    source,
+                    f"sensors[{sensor!r}]",
+                    c,
+                    "not a channel of this corpus",
+                    f"its channels are {list(channels)}",
+                )
             if c in seen:
                 raise DataError(source, f"sensors[{sensor!r}]", c, f"already a channel of sensor {seen[c]!r}")
             seen[c] = sensor

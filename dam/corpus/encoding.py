@@ -15,6 +15,7 @@ The rule
 Every text reader of :mod:`dam.corpus` (CSV, label files, ``corpus.json``,
 TextGrids, EST headers) goes through :func:`read_text` or :func:`decode_text`.
 """
+
 from __future__ import annotations
 
 import codecs
@@ -24,8 +25,10 @@ from dam.corpus.data import DataError
 
 __all__ = ["read_text", "decode_text", "ENCODING_HINT"]
 
-ENCODING_HINT = ("dam reads text as UTF-8 (a byte-order mark is allowed) or UTF-16 with a byte-order mark; "
-                 "convert the file, e.g. iconv -f latin1 -t utf-8")
+ENCODING_HINT = (
+    "dam reads text as UTF-8 (a byte-order mark is allowed) or UTF-16 with a byte-order mark; "
+    "convert the file, e.g. iconv -f latin1 -t utf-8"
+)
 
 
 def decode_text(data: bytes, source=None, *, field: str = "encoding") -> str:
@@ -62,7 +65,7 @@ def decode_text(data: bytes, source=None, *, field: str = "encoding") -> str:
     dam.corpus.data.DataError: old.lab: field 'encoding': byte 0xe9 at offset 3 is not UTF-8 (got 'caf\\ufffd'); ...
     """
     if data.startswith(codecs.BOM_UTF8):
-        data, codec = data[len(codecs.BOM_UTF8):], "utf-8"
+        data, codec = data[len(codecs.BOM_UTF8) :], "utf-8"
         start = len(codecs.BOM_UTF8)
     elif data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
         codec, start = "utf-16", 0
@@ -72,10 +75,14 @@ def decode_text(data: bytes, source=None, *, field: str = "encoding") -> str:
         return data.decode(codec)
     except UnicodeDecodeError as exc:
         offset = start + exc.start
-        context = data[max(0, exc.start - 20):exc.start + 1].decode(codec, errors="replace")
-        raise DataError(source, field, context,
-                        f"byte 0x{data[exc.start]:02x} at offset {offset} is not {codec.upper()}",
-                        ENCODING_HINT) from None
+        context = data[max(0, exc.start - 20) : exc.start + 1].decode(codec, errors="replace")
+        raise DataError(
+            source,
+            field,
+            context,
+            f"byte 0x{data[exc.start]:02x} at offset {offset} is not {codec.upper()}",
+            ENCODING_HINT,
+        ) from None
 
 
 def read_text(path, *, field: str = "encoding") -> str:

@@ -52,6 +52,7 @@ Feature sets (``features``)
 11 frames at 29.97 frames/s span 0.37 s, which at 100 Hz takes dilation 3
 (:func:`window_dilation` turns a window frame rate into a dilation).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -59,8 +60,16 @@ import numpy as np
 from dam.corpus.data import SILENCE, Alignment, DataError
 
 __all__ = [
-    "phone_vocabulary", "frame_phone_indices", "window_features", "window_targets", "overlap_average",
-    "window_offsets", "window_dilation", "n_window_features", "window_feature_names", "phonetic_transition_clusters",
+    "phone_vocabulary",
+    "frame_phone_indices",
+    "window_features",
+    "window_targets",
+    "overlap_average",
+    "window_offsets",
+    "window_dilation",
+    "n_window_features",
+    "window_feature_names",
+    "phonetic_transition_clusters",
     "fit_transition_clusters",
 ]
 
@@ -95,8 +104,7 @@ def phone_vocabulary(corpus_or_phones, silence: str = SILENCE) -> list[str]:
     return sorted(phones)
 
 
-def frame_phone_indices(alignment: Alignment, frame_rate: float, n_frames: int,
-                        vocabulary: list[str]) -> np.ndarray:
+def frame_phone_indices(alignment: Alignment, frame_rate: float, n_frames: int, vocabulary: list[str]) -> np.ndarray:
     """Index into ``vocabulary`` of the phone at every frame.
 
     Returns
@@ -113,8 +121,13 @@ def frame_phone_indices(alignment: Alignment, frame_rate: float, n_frames: int,
     rows = np.empty(len(alignment), dtype=np.intp)
     for k, lab in enumerate(alignment.labels):
         if lab not in index:
-            raise DataError(alignment.source, f"segment {k} label", lab, "phone not in the feature vocabulary",
-                            f"vocabulary: {' '.join(vocabulary)}")
+            raise DataError(
+                alignment.source,
+                f"segment {k} label",
+                lab,
+                "phone not in the feature vocabulary",
+                f"vocabulary: {' '.join(vocabulary)}",
+            )
         rows[k] = index[lab]
     return rows[alignment.segment_index(frame_rate, n_frames)]
 
@@ -174,9 +187,19 @@ def _windows(idx: np.ndarray, kx: int, align: str, pad: int, dilation: int = 1) 
     return np.where(inside, idx[np.clip(pos, 0, max(n - 1, 0))], pad)
 
 
-def window_features(alignment: Alignment, frame_rate: float, n_frames: int, vocabulary: list[str], *,
-                    kx: int = 11, features: str = "raw", align: str = "center", alphabet: str | None = None,
-                    transition_clusters: dict | None = None, dilation: int = 1) -> np.ndarray:
+def window_features(
+    alignment: Alignment,
+    frame_rate: float,
+    n_frames: int,
+    vocabulary: list[str],
+    *,
+    kx: int = 11,
+    features: str = "raw",
+    align: str = "center",
+    alphabet: str | None = None,
+    transition_clusters: dict | None = None,
+    dilation: int = 1,
+) -> np.ndarray:
     """Indicator features of the ``kx``-frame input window of every frame.
 
     Parameters
@@ -209,8 +232,13 @@ def window_features(alignment: Alignment, frame_rate: float, n_frames: int, voca
     if alignment.silence not in vocabulary:
         raise ValueError(f"the vocabulary lacks the silence label {alignment.silence!r} used for padding")
     V = len(vocabulary)
-    W = _windows(frame_phone_indices(alignment, frame_rate, n_frames, vocabulary), kx, align,
-                 vocabulary.index(alignment.silence), dilation)
+    W = _windows(
+        frame_phone_indices(alignment, frame_rate, n_frames, vocabulary),
+        kx,
+        align,
+        vocabulary.index(alignment.silence),
+        dilation,
+    )
     onehot = np.zeros((len(W), kx, V), dtype=np.float32)
     np.put_along_axis(onehot, W[:, :, None], 1.0, axis=2)
     if features == "raw":
@@ -234,10 +262,15 @@ def window_feature_names(vocabulary: list[str], kx: int = 11, features: str = "r
     ``"C+vowel_starting_a[4,5]"``.
     """
     from dam.corpus.phonetics import TAYLOR_CATEGORIES
+
     if features == "raw":
         return [f"phone[{j}]={p}" for j in range(kx) for p in vocabulary]
-    names = [f"phone[{j}]={p}" if k == 0 else f"phone[{j}:{j + k}]={p}"
-             for k in range(min(4, kx)) for j in range(kx - k) for p in vocabulary]
+    names = [
+        f"phone[{j}]={p}" if k == 0 else f"phone[{j}:{j + k}]={p}"
+        for k in range(min(4, kx))
+        for j in range(kx - k)
+        for p in vocabulary
+    ]
     names += [f"cat[{j}]={c}" for j in range(kx) for c in TAYLOR_CATEGORIES]
     names.append("consonant_away_from_centre")
     for group, n_clusters in _PAIR_GROUPS:
@@ -250,6 +283,7 @@ def window_feature_names(vocabulary: list[str], kx: int = 11, features: str = "r
 def _categories(vocabulary, alphabet, silence):
     """(V, 60) membership, (V,) consonant, (V,) vowel, (V, 5) starts, (V, 3) ends."""
     from dam.corpus.phonetics import TAYLOR_CATEGORIES, is_consonant, taylor_categories
+
     alphabet = alphabet or _guess(vocabulary)
     names = list(TAYLOR_CATEGORIES)
     cats = [taylor_categories(p, alphabet, silence) for p in vocabulary]
@@ -261,8 +295,9 @@ def _categories(vocabulary, alphabet, silence):
     return member, cons, vowel, starts, ends
 
 
-def phonetic_transition_clusters(vocabulary: list[str], alphabet: str | None = None,
-                                 silence: str = SILENCE) -> dict[str, np.ndarray]:
+def phonetic_transition_clusters(
+    vocabulary: list[str], alphabet: str | None = None, silence: str = SILENCE
+) -> dict[str, np.ndarray]:
     """A phonetic stand-in for Taylor et al.'s data-driven pair clusters.
 
     CV pairs: 2 clusters, whether the vowel is back or rounded
@@ -276,6 +311,7 @@ def phonetic_transition_clusters(vocabulary: list[str], alphabet: str | None = N
     pair is not of that type.
     """
     from dam.corpus.phonetics import TAYLOR_CATEGORIES
+
     alphabet = alphabet or _guess(vocabulary)
     member, cons, vowel, _, _ = _categories(vocabulary, alphabet, silence)
     names = list(TAYLOR_CATEGORIES)
@@ -292,8 +328,9 @@ def phonetic_transition_clusters(vocabulary: list[str], alphabet: str | None = N
     return out
 
 
-def fit_transition_clusters(corpus, vocabulary: list[str], *, alphabet: str | None = None,
-                            random_state: int = 0) -> dict[str, np.ndarray]:
+def fit_transition_clusters(
+    corpus, vocabulary: list[str], *, alphabet: str | None = None, random_state: int = 0
+) -> dict[str, np.ndarray]:
     """Taylor et al.'s data-driven pair clusters, fitted on a training corpus.
 
     Every adjacent segment pair of type CV, VC or CC is described by the mean
@@ -306,6 +343,7 @@ def fit_transition_clusters(corpus, vocabulary: list[str], *, alphabet: str | No
     dict with keys "CV", "VC", "CC" of int arrays (V, V).
     """
     from sklearn.cluster import KMeans
+
     silence = corpus.alignments[0].silence
     alphabet = alphabet or _guess(vocabulary)
     _, cons, vowel, _, _ = _categories(vocabulary, alphabet, silence)
@@ -338,6 +376,7 @@ def fit_transition_clusters(corpus, vocabulary: list[str], *, alphabet: str | No
 
 def _guess(vocabulary):
     from dam.corpus.phonetics import guess_alphabet
+
     return guess_alphabet(vocabulary)
 
 
@@ -347,19 +386,20 @@ def _linguistic(W, onehot, vocabulary, alphabet, clusters, silence) -> np.ndarra
     clusters = clusters if clusters is not None else phonetic_transition_clusters(vocabulary, alphabet, silence)
     for group, _ in _PAIR_GROUPS:
         if np.shape(clusters.get(group)) != (V, V):
-            raise ValueError(f"transition_clusters[{group!r}] must have shape {(V, V)}, "
-                             f"got {np.shape(clusters.get(group))}")
+            raise ValueError(
+                f"transition_clusters[{group!r}] must have shape {(V, V)}, got {np.shape(clusters.get(group))}"
+            )
     blocks = []
     # 1. phone identity spanning frames j..j+k, k = 0..3
     for k in range(min(4, kx)):
-        span = onehot[:, :kx - k]
+        span = onehot[:, : kx - k]
         for d in range(1, k + 1):
-            span = span * onehot[:, d:kx - k + d]
+            span = span * onehot[:, d : kx - k + d]
         blocks.append(span.reshape(n, -1))
     # 2. category of every frame, and "a consonant away from the centre"
     blocks.append(member[W].reshape(n, -1))
     c, h = kx // 2, kx // 2
-    away = np.r_[max(0, c - h):max(0, c - 1), c + 2:min(kx, c + h + 1)]
+    away = np.r_[max(0, c - h) : max(0, c - 1), c + 2 : min(kx, c + h + 1)]
     blocks.append(cons[W[:, away]].any(axis=1, keepdims=True) if away.size else np.zeros((n, 1), bool))
     # 3. transitions between adjacent frames j, j+1
     L, R = W[:, :-1], W[:, 1:]
@@ -397,8 +437,9 @@ def window_targets(trajectory, *, ky: int = 5, align: str = "center", dilation: 
     return Y[pos].reshape(n, -1)
 
 
-def overlap_average(window_predictions, ky: int, n_channels: int, align: str = "center",
-                    dilation: int = 1) -> np.ndarray:
+def overlap_average(
+    window_predictions, ky: int, n_channels: int, align: str = "center", dilation: int = 1
+) -> np.ndarray:
     """Blend overlapping output windows by the frame-wise mean (Taylor et al., Fig. 4e).
 
     Parameters
@@ -427,6 +468,6 @@ def overlap_average(window_predictions, ky: int, n_channels: int, align: str = "
     for j, off in enumerate(window_offsets(ky, align, dilation)):
         lo, hi = max(0, -off), min(n, n - off)  # windows i whose entry j lands inside [0, n)
         if lo < hi:
-            total[lo + off:hi + off] += P[lo:hi, j]
-            count[lo + off:hi + off] += 1
+            total[lo + off : hi + off] += P[lo:hi, j]
+            count[lo + off : hi + off] += 1
     return total / count[:, None]

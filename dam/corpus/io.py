@@ -19,12 +19,13 @@ A corpus directory holds
 
 Every error names the file, the field and the value.
 """
+
 from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -39,8 +40,17 @@ from dam.corpus.formats.htk import read_lab, write_lab
 from dam.corpus.formats.tables import frame_rate_from_times, read_csv, read_npy, write_csv, write_npy
 from dam.corpus.formats.textgrid import read_textgrid, write_textgrid
 
-__all__ = ["read_alignment", "read_trajectory", "read_mask", "load_corpus", "write_utterance", "save_corpus",
-           "frame_rate_from_times", "TRAJECTORY_READERS", "ALIGNMENT_SUFFIXES"]
+__all__ = [
+    "read_alignment",
+    "read_trajectory",
+    "read_mask",
+    "load_corpus",
+    "write_utterance",
+    "save_corpus",
+    "frame_rate_from_times",
+    "TRAJECTORY_READERS",
+    "ALIGNMENT_SUFFIXES",
+]
 
 ALIGNMENT_SUFFIXES = (".textgrid", ".lab", ".par")
 
@@ -54,7 +64,7 @@ def read_alignment(path, *, tier: str | None = "phones", silence: str = SILENCE)
     >>> from dam.datasets import DATA
     >>> a = dam.read_alignment(DATA / "tiny" / "tiny000.TextGrid")
     >>> a.labels[0]
-    'sil' 
+    'sil'
     """
     suffix = Path(path).suffix.lower()
     if suffix == ".par":
@@ -63,14 +73,20 @@ def read_alignment(path, *, tier: str | None = "phones", silence: str = SILENCE)
         return read_textgrid(path, tier=tier, silence=silence)
     if suffix == ".lab":
         return read_lab(path, silence=silence)
-    raise DataError(os.fspath(path), "extension", suffix, "not an alignment format",
-                    "use a Praat .TextGrid or an HTK .lab file")
+    raise DataError(
+        os.fspath(path), "extension", suffix, "not an alignment format", "use a Praat .TextGrid or an HTK .lab file"
+    )
 
 
 # -- trajectories ---------------------------------------------------------
 #: suffix -> reader(path) returning (data, channel names or None, frame rate or None)
-TRAJECTORY_READERS: dict[str, Callable] = {".csv": read_csv, ".npy": read_npy, ".ema": read_est_trajectory,
-                                           ".est": read_est_trajectory, ".trk": read_est_trajectory}
+TRAJECTORY_READERS: dict[str, Callable] = {
+    ".csv": read_csv,
+    ".npy": read_npy,
+    ".ema": read_est_trajectory,
+    ".est": read_est_trajectory,
+    ".trk": read_est_trajectory,
+}
 
 
 def read_trajectory(path) -> tuple[np.ndarray, list[str] | None, float | None]:
@@ -78,14 +94,22 @@ def read_trajectory(path) -> tuple[np.ndarray, list[str] | None, float | None]:
     path = os.fspath(path)
     suffix = Path(path).suffix.lower()
     if suffix not in TRAJECTORY_READERS:
-        raise DataError(path, "extension", suffix, "not a trajectory format",
-                        f"supported: {', '.join(TRAJECTORY_READERS)}")
+        raise DataError(
+            path, "extension", suffix, "not a trajectory format", f"supported: {', '.join(TRAJECTORY_READERS)}"
+        )
     return TRAJECTORY_READERS[suffix](path)
 
 
 # -- corpora --------------------------------------------------------------
-def load_corpus(path, *, tier: str | None = "phones", silence: str = SILENCE,
-                frame_rate: float | None = None, format: str | None = None, **options) -> Corpus:
+def load_corpus(
+    path,
+    *,
+    tier: str | None = "phones",
+    silence: str = SILENCE,
+    frame_rate: float | None = None,
+    format: str | None = None,
+    **options,
+) -> Corpus:
     """Read a corpus: a directory as described above, or a corpus as distributed.
 
     Parameters
@@ -126,9 +150,15 @@ def load_corpus(path, *, tier: str | None = "phones", silence: str = SILENCE,
         # a corpus.json dropped beside the data still sets the frame rate, the sensors, the length unit
         meta_path = Path(path) / "corpus.json"
         meta = read_corpus_json(meta_path) if meta_path.is_file() else {}
-        corpus = load_formatted(fmt, path, read_alignment=read_alignment, tier=tier, silence=silence,
-                                frame_rate=frame_rate if frame_rate is not None else meta.get("frame_rate"),
-                                **options)
+        corpus = load_formatted(
+            fmt,
+            path,
+            read_alignment=read_alignment,
+            tier=tier,
+            silence=silence,
+            frame_rate=frame_rate if frame_rate is not None else meta.get("frame_rate"),
+            **options,
+        )
         extra = {k: v for k, v in meta.items() if k not in ("frame_rate", "channels")}
         resolve_sensors(corpus.channels, extra.get("sensors"), source=str(meta_path))
         corpus.metadata.update(extra)
@@ -145,8 +175,13 @@ def load_corpus(path, *, tier: str | None = "phones", silence: str = SILENCE,
     files = sorted(p for p in root.iterdir() if p.is_file())
     aligns = [p for p in files if p.suffix.lower() in ALIGNMENT_SUFFIXES]
     if not aligns:
-        raise DataError(str(root), "alignments", 0, "no .TextGrid or .lab files in the directory",
-                        "a corpus directory holds <stem>.TextGrid (or .lab) + <stem>.csv (or .npy) per utterance")
+        raise DataError(
+            str(root),
+            "alignments",
+            0,
+            "no .TextGrid or .lab files in the directory",
+            "a corpus directory holds <stem>.TextGrid (or .lab) + <stem>.csv (or .npy) per utterance",
+        )
     by_stem: dict[str, list[Path]] = {}
     for p in files:
         by_stem.setdefault(p.stem, []).append(p)
@@ -159,8 +194,12 @@ def load_corpus(path, *, tier: str | None = "phones", silence: str = SILENCE,
         seen_stems.add(stem)
         trajs = [p for p in by_stem[stem] if p.suffix.lower() in TRAJECTORY_READERS]
         if not trajs:
-            raise DataError(str(apath), "trajectory", stem,
-                            f"no trajectory file {stem}{{{','.join(TRAJECTORY_READERS)}}} beside the alignment")
+            raise DataError(
+                str(apath),
+                "trajectory",
+                stem,
+                f"no trajectory file {stem}{{{','.join(TRAJECTORY_READERS)}}} beside the alignment",
+            )
         if len(trajs) > 1:
             raise DataError(str(apath), "trajectory", [p.name for p in trajs], "more than one trajectory file")
         tpath = str(trajs[0])
@@ -176,12 +215,21 @@ def load_corpus(path, *, tier: str | None = "phones", silence: str = SILENCE,
         this_fr = fr
         if file_fr is not None:
             if fr is not None and abs(file_fr - float(fr)) > 0.01 * float(fr):
-                raise DataError(tpath, "time", f"{file_fr:g} frames/s",
-                                f"the time column disagrees with frame_rate {float(fr):g} of corpus.json")
+                raise DataError(
+                    tpath,
+                    "time",
+                    f"{file_fr:g} frames/s",
+                    f"the time column disagrees with frame_rate {float(fr):g} of corpus.json",
+                )
             this_fr = float(fr) if fr is not None else round(file_fr, 6)
         if this_fr is None:
-            raise DataError(tpath, "frame_rate", None, "the frame rate is unknown",
-                            "add corpus.json with \"frame_rate\", a leading time column, or pass frame_rate=")
+            raise DataError(
+                tpath,
+                "frame_rate",
+                None,
+                "the frame rate is unknown",
+                'add corpus.json with "frame_rate", a leading time column, or pass frame_rate=',
+            )
         audio = _utterance_audio(by_stem[stem], meta.get("audio_rate"), meta_path)
         mask = read_mask(root / f"{stem}.mask.npy") if (root / f"{stem}.mask.npy").is_file() else None
         utts.append(Utterance(alignment, data, this_fr, names, audio=audio, name=stem, source=tpath, mask=mask))
@@ -200,8 +248,13 @@ def _utterance_audio(paths, audio_rate, meta_path) -> str | None:
         raise DataError(str(found[0]), "audio", [p.name for p in found], "more than one audio file")
     rate = audio_header(found[0])[0]
     if audio_rate is not None and rate != audio_rate:
-        raise DataError(str(found[0]), "sample rate", rate, f"{meta_path} says audio_rate {audio_rate}",
-                        "resample the file or correct audio_rate")
+        raise DataError(
+            str(found[0]),
+            "sample rate",
+            rate,
+            f"{meta_path} says audio_rate {audio_rate}",
+            "resample the file or correct audio_rate",
+        )
     return str(found[0])
 
 
@@ -225,8 +278,7 @@ def read_corpus_json(path) -> dict:
     if not isinstance(meta, dict):
         raise DataError(path, "json", type(meta).__name__, "must hold a JSON object")
     fr = meta.get("frame_rate")
-    if fr is not None and (isinstance(fr, bool) or not isinstance(fr, (int, float))
-                           or not (0 < fr < float("inf"))):
+    if fr is not None and (isinstance(fr, bool) or not isinstance(fr, (int, float)) or not (0 < fr < float("inf"))):
         raise DataError(path, "frame_rate", fr, "must be a positive finite number (frames per second)")
     ch = meta.get("channels")
     if ch is not None:
@@ -240,8 +292,14 @@ def read_corpus_json(path) -> dict:
 
 
 # -- writers --------------------------------------------------------------
-def write_utterance(utt: Utterance, directory, *, alignment_format: str = "TextGrid",
-                    trajectory_format: str = "csv", decimals: int | None = 6) -> None:
+def write_utterance(
+    utt: Utterance,
+    directory,
+    *,
+    alignment_format: str = "TextGrid",
+    trajectory_format: str = "csv",
+    decimals: int | None = 6,
+) -> None:
     """Write one utterance as ``<name>.TextGrid|.lab`` + ``<name>.csv|.npy`` in ``directory``."""
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
@@ -274,8 +332,15 @@ def read_mask(path) -> np.ndarray:
     return mask
 
 
-def save_corpus(corpus: Corpus, directory, *, alignment_format: str = "TextGrid",
-                trajectory_format: str = "csv", decimals: int | None = 6, metadata: dict | None = None) -> None:
+def save_corpus(
+    corpus: Corpus,
+    directory,
+    *,
+    alignment_format: str = "TextGrid",
+    trajectory_format: str = "csv",
+    decimals: int | None = 6,
+    metadata: dict | None = None,
+) -> None:
     """Write ``corpus`` as a corpus directory that :func:`load_corpus` reads back.
 
     Examples
@@ -292,17 +357,18 @@ def save_corpus(corpus: Corpus, directory, *, alignment_format: str = "TextGrid"
     if corpus.name:
         meta["name"] = corpus.name
     # frame_rate and channels describe the files written here: metadata may not override them.
-    meta.update({k: v for k, v in {**corpus.metadata, **(metadata or {})}.items()
-                 if k not in ("frame_rate", "channels")})
+    meta.update(
+        {k: v for k, v in {**corpus.metadata, **(metadata or {})}.items() if k not in ("frame_rate", "channels")}
+    )
     try:
         text = json.dumps(meta, indent=2, allow_nan=False) + "\n"
     except (TypeError, ValueError) as exc:
-        raise DataError(str(d / "corpus.json"), "metadata", type(exc).__name__,
-                        f"cannot be written as JSON: {exc}") from None
+        raise DataError(
+            str(d / "corpus.json"), "metadata", type(exc).__name__, f"cannot be written as JSON: {exc}"
+        ) from None
     with atomic_write(d / "corpus.json", "w", encoding="utf-8") as fh:
         fh.write(text)
     for k, u in enumerate(corpus):
         if u.name is None:
             u = u.replace(name=f"utt{k:04d}")
-        write_utterance(u, d, alignment_format=alignment_format, trajectory_format=trajectory_format,
-                        decimals=decimals)
+        write_utterance(u, d, alignment_format=alignment_format, trajectory_format=trajectory_format, decimals=decimals)

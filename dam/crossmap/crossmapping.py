@@ -32,13 +32,13 @@ The paper requires at least as many adjusted target vertices as controls
 When the target's controls *are* the key shapes (the paper's "well-defined
 bases" case), leave ``target_key_shapes`` unset: the weights are the controls.
 """
+
 from __future__ import annotations
 
 import warnings
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
-
 
 from dam.base import Interval, Transformer
 from dam.corpus.data import DataError
@@ -47,8 +47,15 @@ from dam.crossmap.rig import LinearRig, as_rig, check_bounds, check_fitted, chec
 __all__ = ["find_key_shapes", "blend_weights", "blend_vertices", "fit_controls", "CrossMapper"]
 
 
-def find_key_shapes(frames, *, preference=None, damping: float = 0.9, max_frames: int = 2000,
-                    max_iter: int = 1000, random_state: int | None = 0):
+def find_key_shapes(
+    frames,
+    *,
+    preference=None,
+    damping: float = 0.9,
+    max_frames: int = 2000,
+    max_iter: int = 1000,
+    random_state: int | None = 0,
+):
     """Key shapes: exemplar frames found by affinity propagation.
 
     Parameters
@@ -97,11 +104,10 @@ def find_key_shapes(frames, *, preference=None, damping: float = 0.9, max_frames
     if isinstance(preference, str):
         if preference != "min":
             raise DataError(None, "preference", preference, 'must be a number, None or "min"')
-        sq = np.sum(Xs ** 2, axis=1)
+        sq = np.sum(Xs**2, axis=1)
         sim = -(sq[:, None] + sq[None, :] - 2 * Xs @ Xs.T)
         preference = float(np.min(sim))
-    ap = AffinityPropagation(damping=damping, preference=preference, max_iter=max_iter,
-                             random_state=random_state)
+    ap = AffinityPropagation(damping=damping, preference=preference, max_iter=max_iter, random_state=random_state)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
         ap.fit(Xs)
@@ -110,7 +116,8 @@ def find_key_shapes(frames, *, preference=None, damping: float = 0.9, max_frames
         raise ValueError(
             f"affinity propagation did not converge on {len(Xs)} frames (damping={damping}, "
             f"preference={preference!r}, max_iter={max_iter}); raise damping or max_iter, "
-            "lower the preference, or give the key shapes yourself")
+            "lower the preference, or give the key shapes yourself"
+        )
     idx = rows[np.sort(centers)]
     return X[idx].copy(), idx
 
@@ -161,8 +168,16 @@ def blend_vertices(weights, target_key_shapes) -> np.ndarray:
     return W @ V
 
 
-def fit_controls(vertices, rig, *, bounds=(0.0, 1.0), n_controls: int | None = None, x0=None,
-                 jacobian: Callable | None = None, max_nfev: int | None = None) -> np.ndarray:
+def fit_controls(
+    vertices,
+    rig,
+    *,
+    bounds=(0.0, 1.0),
+    n_controls: int | None = None,
+    x0=None,
+    jacobian: Callable | None = None,
+    max_nfev: int | None = None,
+) -> np.ndarray:
     """Per-frame rig controls that reproduce the target vertices, within bounds.
 
     Solves ``min ||V^i - V(C^i)||^2`` subject to ``lower <= C^i <= upper`` for
@@ -210,16 +225,18 @@ def _fit_controls(vertices, rig, bounds, n_controls, x0, jacobian, max_nfev):
     if linear is not None:
         V = check_frames(vertices, "vertices", n_dims=linear.n_dims, dims_name="the rig's n_dims")
         if linear.n_dims < n:
-            warnings.warn(f"the rig has {n} controls but only {linear.n_dims} vertex coordinates; "
-                          "the controls are not unique (Appendix A asks for |V| >= |C|)", stacklevel=3)
+            warnings.warn(
+                f"the rig has {n} controls but only {linear.n_dims} vertex coordinates; "
+                "the controls are not unique (Appendix A asks for |V| >= |C|)",
+                stacklevel=3,
+            )
         A = linear.deltas.T
         B = V - linear.neutral
         # Frames whose unbounded least-squares solution is feasible need no BVLS.
         out, *_ = np.linalg.lstsq(A, B.T, rcond=None)
         out = out.T
         full_rank = np.linalg.matrix_rank(A) == n
-        todo = np.arange(len(V)) if not full_rank else \
-            np.flatnonzero(((out < lo) | (out > hi)).any(axis=1))
+        todo = np.arange(len(V)) if not full_rank else np.flatnonzero(((out < lo) | (out > hi)).any(axis=1))
         for i in todo:
             out[i] = lsq_linear(A, B[i], bounds=(lo, hi), method="bvls").x
         return np.clip(out, lo, hi)
@@ -228,19 +245,27 @@ def _fit_controls(vertices, rig, bounds, n_controls, x0, jacobian, max_nfev):
     c = 0.5 * (lo + hi) if x0 is None else np.clip(check_frames(x0, "x0", n_dims=n)[0], lo, hi)
     first = np.asarray(func(c), dtype=float).ravel()
     if first.shape[0] != V.shape[1]:
-        raise DataError(None, "rig", first.shape, f"returns {first.shape[0]} coordinates but the "
-                        f"vertices have {V.shape[1]}")
+        raise DataError(
+            None, "rig", first.shape, f"returns {first.shape[0]} coordinates but the vertices have {V.shape[1]}"
+        )
     jac = "2-point" if jacobian is None else (lambda c_: np.asarray(jacobian(c_), dtype=float))
     out = np.empty((len(V), n))
     for i, v in enumerate(V):
         # Keep the start strictly inside the box: trf needs an interior point.
         start = np.clip(c, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
-        res = least_squares(lambda c_: np.asarray(func(c_), dtype=float).ravel() - v, start,
-                            jac=jac, bounds=(lo, hi), method="trf", max_nfev=max_nfev,
-                            x_scale="jac")
+        res = least_squares(
+            lambda c_, v=v: np.asarray(func(c_), dtype=float).ravel() - v,
+            start,
+            jac=jac,
+            bounds=(lo, hi),
+            method="trf",
+            max_nfev=max_nfev,
+            x_scale="jac",
+        )
         if not np.all(np.isfinite(res.x)):
-            raise DataError(None, f"vertices[{i}]", "non-finite controls",
-                            "the rig function returned non-finite values")
+            raise DataError(
+                None, f"vertices[{i}]", "non-finite controls", "the rig function returned non-finite values"
+            )
         c = out[i] = np.clip(res.x, lo, hi)
     return out
 
@@ -286,9 +311,21 @@ class CrossMapper(Transformer):
         "random_state": ["random_state"],
     }
 
-    def __init__(self, *, key_shapes=None, target_key_shapes=None, rig=None, n_controls=None,
-                 control_names=None, bounds=(0.0, 1.0), preference=None, damping=0.9,
-                 max_frames=2000, max_iter=1000, random_state=0):
+    def __init__(
+        self,
+        *,
+        key_shapes=None,
+        target_key_shapes=None,
+        rig=None,
+        n_controls=None,
+        control_names=None,
+        bounds=(0.0, 1.0),
+        preference=None,
+        damping=0.9,
+        max_frames=2000,
+        max_iter=1000,
+        random_state=0,
+    ):
         self.key_shapes = key_shapes
         self.target_key_shapes = target_key_shapes
         self.rig = rig
@@ -301,7 +338,7 @@ class CrossMapper(Transformer):
         self.max_iter = max_iter
         self.random_state = random_state
 
-    def fit(self, X, y=None) -> "CrossMapper":
+    def fit(self, X, y=None) -> CrossMapper:
         """Find (or check) the key shapes on captured frames.
 
         Parameters
@@ -312,11 +349,17 @@ class CrossMapper(Transformer):
         frames = stack_frames(X, "X")
         if self.key_shapes is None:
             self.key_shapes_, self.key_frame_indices_ = find_key_shapes(
-                frames, preference=self.preference, damping=self.damping, max_frames=self.max_frames,
-                max_iter=self.max_iter, random_state=self.random_state)
+                frames,
+                preference=self.preference,
+                damping=self.damping,
+                max_frames=self.max_frames,
+                max_iter=self.max_iter,
+                random_state=self.random_state,
+            )
         else:
-            self.key_shapes_ = check_frames(self.key_shapes, "key_shapes", n_dims=frames.shape[1],
-                                            dims_name="the captured frames' n_dims").copy()
+            self.key_shapes_ = check_frames(
+                self.key_shapes, "key_shapes", n_dims=frames.shape[1], dims_name="the captured frames' n_dims"
+            ).copy()
             self.key_frame_indices_ = None
         self.n_dims_ = frames.shape[1]
         return self
@@ -342,8 +385,9 @@ class CrossMapper(Transformer):
             raise DataError(None, "target_key_shapes", None, "not set; pose the key shapes on the target first")
         V = check_frames(self.target_key_shapes, "target_key_shapes")
         if len(V) != len(self.key_shapes_):
-            raise DataError(None, "target_key_shapes", V.shape,
-                            f"needs one row per key shape ({len(self.key_shapes_)})")
+            raise DataError(
+                None, "target_key_shapes", V.shape, f"needs one row per key shape ({len(self.key_shapes_)})"
+            )
         return V
 
     def vertices(self, X):
@@ -372,8 +416,12 @@ class CrossMapper(Transformer):
         if self.target_key_shapes is None:
             return self.weights(X, names=self.control_names)
         if self.rig is None:
-            raise DataError(None, "rig", None, "target_key_shapes are set but no rig to fit controls to; "
-                            "use vertices() for the blended vertices")
+            raise DataError(
+                None,
+                "rig",
+                None,
+                "target_key_shapes are set but no rig to fit controls to; use vertices() for the blended vertices",
+            )
         V = self._target_key_shapes()
         _, _, n = as_rig(self.rig, self.n_controls)
 

@@ -33,9 +33,10 @@ Decisions (the paper leaves them open):
 * **Gradient.** Exact for a :class:`~dam.rig.LinearRig` or when a Jacobian is
   given; otherwise L-BFGS-B's finite differences.
 """
+
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -66,7 +67,7 @@ def similarity_transform(src, dst):
         raise DataError(None, "dst", Q.shape, f"needs as many points as src ({len(P)})")
     mp, mq = P.mean(0), Q.mean(0)
     Pc, Qc = P - mp, Q - mq
-    var = np.sum(Pc ** 2) / len(P)
+    var = np.sum(Pc**2) / len(P)
     if var <= 0:
         raise DataError(None, "src", P.shape, "all points coincide; no transform is defined")
     U, S, Vt = np.linalg.svd(Qc.T @ Pc / len(P))
@@ -146,8 +147,9 @@ def tied_parameters(n_params: int, bounds, symmetric_pairs: Sequence[tuple[int, 
     for members in sorted(groups.values()):
         g_lo, g_hi = lo[members].max(), hi[members].min()
         if g_lo > g_hi:
-            raise DataError(None, "bounds", (members, float(g_lo), float(g_hi)),
-                            "tied parameters have bounds that do not overlap")
+            raise DataError(
+                None, "bounds", (members, float(g_lo), float(g_hi)), "tied parameters have bounds that do not overlap"
+            )
         col = np.zeros(n_params)
         col[members] = 1.0
         m = float(len(members))
@@ -169,9 +171,21 @@ def _to_vars(theta, M, lower, upper):
     return np.clip((M.T @ theta) / np.abs(M).sum(0), lower, upper)
 
 
-def solve_landmarks(targets, rig, *, alpha: float = 0.01, bounds=(0.0, 1.0), n_params: int | None = None,
-                    jacobian: Callable | None = None, symmetric_pairs=None, x0=None,
-                    max_iter: int = 500, tol: float = 1e-12, n_restarts: int = 5, return_info: bool = False):
+def solve_landmarks(
+    targets,
+    rig,
+    *,
+    alpha: float = 0.01,
+    bounds=(0.0, 1.0),
+    n_params: int | None = None,
+    jacobian: Callable | None = None,
+    symmetric_pairs=None,
+    x0=None,
+    max_iter: int = 500,
+    tol: float = 1e-12,
+    n_restarts: int = 5,
+    return_info: bool = False,
+):
     """Rig parameters of every frame from landmark targets (Eqs. 2-4), L-BFGS-B, warm-started.
 
     Parameters
@@ -314,9 +328,21 @@ class LandmarkSolver(Transformer):
         "tol": [Interval(float, 0, None, closed="left")],
     }
 
-    def __init__(self, *, rig=None, n_params=None, alpha=0.01, bounds=(0.0, 1.0), symmetric_pairs=None,
-                 jacobian=None, neutral_params=None, landmark_dim=2, param_names=None,
-                 max_iter=500, tol=1e-12):
+    def __init__(
+        self,
+        *,
+        rig=None,
+        n_params=None,
+        alpha=0.01,
+        bounds=(0.0, 1.0),
+        symmetric_pairs=None,
+        jacobian=None,
+        neutral_params=None,
+        landmark_dim=2,
+        param_names=None,
+        max_iter=500,
+        tol=1e-12,
+    ):
         self.rig = rig
         self.n_params = n_params
         self.alpha = alpha
@@ -335,12 +361,15 @@ class LandmarkSolver(Transformer):
     def _rig_fn(self):
         return as_rig(self.rig, self.n_params, count_name="n_params")[1]
 
-    def fit(self, X=None, y=None) -> "LandmarkSolver":
+    def fit(self, X=None, y=None) -> LandmarkSolver:
         """Fit the neutral alignment on captured neutral-pose frames (their mean), or none if X is None."""
         self._validate_params()
         n = self._n()
-        thN = np.zeros(n) if self.neutral_params is None else check_frames(self.neutral_params,
-                                                                           "neutral_params", n_dims=n)[0]
+        thN = (
+            np.zeros(n)
+            if self.neutral_params is None
+            else check_frames(self.neutral_params, "neutral_params", n_dims=n)[0]
+        )
         d = int(self.landmark_dim)
         if X is None:
             self.scale_, self.rotation_ = 1.0, np.eye(d)
@@ -350,19 +379,33 @@ class LandmarkSolver(Transformer):
         self.captured_neutral_ = frames.mean(0)
         self.rig_neutral_ = np.asarray(self._rig_fn()(thN), dtype=float).ravel()
         if len(self.rig_neutral_) != len(self.captured_neutral_):
-            raise DataError(None, "X", frames.shape, f"has {frames.shape[1]} coordinates but the rig has "
-                            f"{len(self.rig_neutral_)} landmark coordinates")
-        self.scale_, self.rotation_, _ = similarity_transform(self.captured_neutral_.reshape(-1, d),
-                                                              self.rig_neutral_.reshape(-1, d))
+            raise DataError(
+                None,
+                "X",
+                frames.shape,
+                f"has {frames.shape[1]} coordinates but the rig has {len(self.rig_neutral_)} landmark coordinates",
+            )
+        self.scale_, self.rotation_, _ = similarity_transform(
+            self.captured_neutral_.reshape(-1, d), self.rig_neutral_.reshape(-1, d)
+        )
         return self
 
     def _solve(self, F):
         if self.captured_neutral_ is not None:
             F = landmark_targets(F, self.captured_neutral_, self.rig_neutral_, landmark_dim=self.landmark_dim)
         x0 = self.neutral_params
-        return solve_landmarks(F, self._rig_fn(), alpha=self.alpha, bounds=self.bounds, n_params=self.n_params,
-                               jacobian=self.jacobian, symmetric_pairs=self.symmetric_pairs, x0=x0,
-                               max_iter=self.max_iter, tol=self.tol)
+        return solve_landmarks(
+            F,
+            self._rig_fn(),
+            alpha=self.alpha,
+            bounds=self.bounds,
+            n_params=self.n_params,
+            jacobian=self.jacobian,
+            symmetric_pairs=self.symmetric_pairs,
+            x0=x0,
+            max_iter=self.max_iter,
+            tol=self.tol,
+        )
 
     def transform(self, X):
         """Rig parameters per frame: array, Utterance, Corpus (alignments kept) or list in, same out."""

@@ -15,19 +15,29 @@ whose controls in [0, 1] are named articulatory gestures (jaw opening,
 tongue fronting, lip rounding, ...), each the outline difference between two
 of VTL's stock shapes.
 """
+
 from __future__ import annotations
 
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from dam.corpus.data import Corpus, DataError
-from dam.datasets.vtl import VTL_CHANNELS, import_vtl
 from dam.crossmap.rig import LinearRig, check_frames, map_trajectories
+from dam.datasets.vtl import VTL_CHANNELS, import_vtl
 
-__all__ = ["CONTOURS", "TOY_CONTROLS", "resample_contour", "outline_channels", "tract_outlines",
-           "outline_corpus", "vtl_shape", "toy_tract_rig", "plot_outline"]
+__all__ = [
+    "CONTOURS",
+    "TOY_CONTROLS",
+    "resample_contour",
+    "outline_channels",
+    "tract_outlines",
+    "outline_corpus",
+    "vtl_shape",
+    "toy_tract_rig",
+    "plot_outline",
+]
 
 #: The polylines VTL's ``vtlGetOutlines`` returns, in its order.
 CONTOURS = ("upper", "lower", "tongue", "epiglottis")
@@ -92,8 +102,9 @@ def _outline(vtl, state, contours, n_points) -> np.ndarray:
     return np.concatenate([resample_contour(lines[c], n_points).ravel() for c in contours])
 
 
-def tract_outlines(states, *, contours: Sequence[str] = CONTOURS, n_points: int = 16, step: int = 1,
-                   verbose: int = 0) -> np.ndarray:
+def tract_outlines(
+    states, *, contours: Sequence[str] = CONTOURS, n_points: int = 16, step: int = 1, verbose: int = 0
+) -> np.ndarray:
     """Outline point trajectories of tract-parameter trajectories.
 
     Parameters
@@ -128,19 +139,26 @@ def tract_outlines(states, *, contours: Sequence[str] = CONTOURS, n_points: int 
     if rows[-1] != len(X) - 1:
         rows = np.append(rows, len(X) - 1)
     from tqdm.auto import tqdm
+
     show = verbose > 0 and sys.stderr.isatty()
-    out = np.stack([_outline(vtl, X[i], contours, n_points)
-                    for i in tqdm(rows, desc="outlines", disable=not show, file=sys.stderr)])
+    out = np.stack(
+        [
+            _outline(vtl, X[i], contours, n_points)
+            for i in tqdm(rows, desc="outlines", disable=not show, file=sys.stderr)
+        ]
+    )
     if len(rows) == len(X):
         return out
     if len(rows) < 4:
         return np.stack([np.interp(np.arange(len(X)), rows, out[:, j]) for j in range(out.shape[1])], 1)
     from scipy.interpolate import CubicSpline
+
     return CubicSpline(rows, out, axis=0)(np.arange(len(X)))
 
 
-def outline_corpus(corpus: Corpus, *, contours: Sequence[str] = CONTOURS, n_points: int = 16,
-                   step: int = 1, verbose: int = 0) -> Corpus:
+def outline_corpus(
+    corpus: Corpus, *, contours: Sequence[str] = CONTOURS, n_points: int = 16, step: int = 1, verbose: int = 0
+) -> Corpus:
     """A corpus of tract parameters (e.g. ``dam.datasets.load("vtl")``) as outline trajectories.
 
     The alignments, frame rate and names are kept; the channels become
@@ -149,19 +167,24 @@ def outline_corpus(corpus: Corpus, *, contours: Sequence[str] = CONTOURS, n_poin
     """
     missing = [c for c in VTL_CHANNELS if c not in corpus.channels]
     if missing:
-        raise DataError(corpus.source, "channels", list(corpus.channels),
-                        f"not VTL tract parameters: missing {', '.join(missing)}")
+        raise DataError(
+            corpus.source, "channels", list(corpus.channels), f"not VTL tract parameters: missing {', '.join(missing)}"
+        )
     order = [corpus.channels.index(c) for c in VTL_CHANNELS]
     names = outline_channels(contours, n_points)
-    out = map_trajectories(corpus, lambda F: tract_outlines(F[:, order], contours=contours, n_points=n_points,
-                                                            step=step, verbose=verbose),
-                           names, name_suffix="outlines")
+    out = map_trajectories(
+        corpus,
+        lambda F: tract_outlines(F[:, order], contours=contours, n_points=n_points, step=step, verbose=verbose),
+        names,
+        name_suffix="outlines",
+    )
     out.metadata.update({"outline_contours": list(_check_contours(contours)), "outline_points": int(n_points)})
     return out
 
 
 def vtl_shape(name: str) -> np.ndarray:
-    """The tract state (19,) of one of the speaker's stock shapes (``"a"``, ``"i"``, ``"tt-alveolar-closure(a)"``...)."""
+    """The tract state (19,) of one of the speaker's stock shapes (``"a"``, ``"i"``,
+    ``"tt-alveolar-closure(a)"``...)."""
     vtl = import_vtl()
     try:
         return np.asarray(vtl.get_shape(name, "tract"), dtype=float)
@@ -169,8 +192,9 @@ def vtl_shape(name: str) -> np.ndarray:
         raise DataError(None, "shape", name, f"not a shape of the VTL speaker ({exc})") from None
 
 
-def toy_tract_rig(*, contours: Sequence[str] = CONTOURS, n_points: int = 16, controls: dict | None = None,
-                  neutral: str = "@") -> LinearRig:
+def toy_tract_rig(
+    *, contours: Sequence[str] = CONTOURS, n_points: int = 16, controls: dict | None = None, neutral: str = "@"
+) -> LinearRig:
     """A linear blendshape rig on outline points with named controls in [0, 1].
 
     Parameters
@@ -198,6 +222,7 @@ def toy_tract_rig(*, contours: Sequence[str] = CONTOURS, n_points: int = 16, con
 def plot_outline(frame, *, contours: Sequence[str] = CONTOURS, n_points: int = 16, ax=None, **style):
     """Draw one outline frame (flattened points) as polylines; returns the axes."""
     import matplotlib.pyplot as plt
+
     contours = _check_contours(contours)
     F = np.asarray(frame, dtype=float).reshape(len(contours), n_points, 2)
     ax = ax or plt.gca()

@@ -35,6 +35,7 @@ Reading of the paper's ambiguities (each a decision here):
   ``r_1^{-3}, r_1^{+3}, ..., r_K^{-3}, r_K^{+3}``; in files (and here) the
   poses are *rows*, in the same order.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -43,8 +44,14 @@ from dam.base import Interval, Options, Transformer
 from dam.corpus.data import DataError
 from dam.crossmap.rig import check_bounds, check_fitted, check_frames, map_trajectories, stack_frames
 
-__all__ = ["principal_modes", "project", "retargeting_poses", "retarget_weights",
-           "rig_space_retarget", "RigSpaceRetargeter"]
+__all__ = [
+    "principal_modes",
+    "project",
+    "retargeting_poses",
+    "retarget_weights",
+    "rig_space_retarget",
+    "RigSpaceRetargeter",
+]
 
 
 def principal_modes(frames, n_modes, *, source: str | None = None):
@@ -72,14 +79,20 @@ def principal_modes(frames, n_modes, *, source: str | None = None):
     if isinstance(n_modes, str) and n_modes == "auto":  # as many as fit, at most the paper's 4
         n_modes = max(1, min(4, k_max))
     if not (isinstance(n_modes, (int, np.integer)) and 1 <= n_modes <= k_max):
-        raise DataError(source, "n_modes", n_modes, f"must be an integer in [1, {k_max}] for "
-                        f"{len(X)} frames of {X.shape[1]} dims", "or 'auto'")
+        raise DataError(
+            source,
+            "n_modes",
+            n_modes,
+            f"must be an integer in [1, {k_max}] for {len(X)} frames of {X.shape[1]} dims",
+            "or 'auto'",
+        )
     pca = PCA(n_components=int(n_modes), svd_solver="full").fit(X)
     lam = pca.explained_variance_
     if np.any(lam <= 1e-12 * max(lam[0], 1e-300)):
         k = int(np.flatnonzero(lam <= 1e-12 * max(lam[0], 1e-300))[0])
-        raise DataError(source, "n_modes", n_modes, f"mode {k + 1} has no variance in the reference "
-                        "trajectories; use fewer modes")
+        raise DataError(
+            source, "n_modes", n_modes, f"mode {k + 1} has no variance in the reference trajectories; use fewer modes"
+        )
     return pca.mean_.copy(), pca.components_.copy(), lam.copy()
 
 
@@ -108,7 +121,7 @@ def retargeting_poses(mean, modes, eigenvalues, u=(-3.0, 3.0)) -> np.ndarray:
     u = _sigma_steps(u)
     modes = check_frames(modes, "modes")
     sd = np.sqrt(np.asarray(eigenvalues, dtype=float))
-    step = (sd[:, None] * u[None, :]).ravel()          # (2K,)
+    step = (sd[:, None] * u[None, :]).ravel()  # (2K,)
     return np.asarray(mean, dtype=float) + step[:, None] * np.repeat(modes, 2, axis=0)
 
 
@@ -202,8 +215,9 @@ class RigSpaceRetargeter(Transformer):
         "relative": ["boolean"],
     }
 
-    def __init__(self, *, n_modes=4, u=(-3.0, 3.0), rig_poses=None, rig_neutral=None,
-                 relative=False, rig_names=None, bounds=None):
+    def __init__(
+        self, *, n_modes=4, u=(-3.0, 3.0), rig_poses=None, rig_neutral=None, relative=False, rig_names=None, bounds=None
+    ):
         self.n_modes = n_modes
         self.u = u
         self.rig_poses = rig_poses
@@ -212,7 +226,7 @@ class RigSpaceRetargeter(Transformer):
         self.rig_names = rig_names
         self.bounds = bounds
 
-    def fit(self, X, y=None) -> "RigSpaceRetargeter":
+    def fit(self, X, y=None) -> RigSpaceRetargeter:
         """Principal modes of the reference trajectories (array, Utterance, Corpus or list)."""
         self._validate_params()
         frames = stack_frames(X, "X")
@@ -244,12 +258,21 @@ class RigSpaceRetargeter(Transformer):
         """Rig parameters per frame (Eq. 3): array, Utterance, Corpus (alignments kept) or list."""
         self._check_fitted()
         if self.rig_poses is None or self.rig_neutral is None:
-            raise DataError(None, "rig_poses" if self.rig_poses is None else "rig_neutral", None,
-                            "not set; pose reference_poses() on the rig first")
+            raise DataError(
+                None,
+                "rig_poses" if self.rig_poses is None else "rig_neutral",
+                None,
+                "not set; pose reference_poses() on the rig first",
+            )
         R = check_frames(self.rig_poses, "rig_poses")
         if len(R) != 2 * len(self.eigenvalues_):
-            raise DataError(None, "rig_poses", R.shape, f"needs {2 * len(self.eigenvalues_)} rows "
-                            f"(poses at u-, u+ for each of the {len(self.eigenvalues_)} modes)")
+            raise DataError(
+                None,
+                "rig_poses",
+                R.shape,
+                f"needs {2 * len(self.eigenvalues_)} rows "
+                f"(poses at u-, u+ for each of the {len(self.eigenvalues_)} modes)",
+            )
         names = [f"r{k}" for k in range(R.shape[1])] if self.rig_names is None else list(self.rig_names)
         if len(names) != R.shape[1]:
             raise DataError(None, "rig_names", len(names), f"expected {R.shape[1]} names")

@@ -15,20 +15,31 @@ This module also holds the small input helpers the three modules share:
 frame matrices checked once (shape, NaN) and trajectories of a
 ``Utterance``/``Corpus`` mapped frame-wise with their alignments kept.
 """
+
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from dam.corpus.data import Corpus, DataError, Utterance
 
-__all__ = ["LinearRig", "as_rig", "check_frames", "check_bounds", "map_trajectories", "stack_frames",
-           "check_fitted", "load_matrix", "name_source"]
+__all__ = [
+    "LinearRig",
+    "as_rig",
+    "check_frames",
+    "check_bounds",
+    "map_trajectories",
+    "stack_frames",
+    "check_fitted",
+    "load_matrix",
+    "name_source",
+]
 
 
-def check_frames(X, field: str, *, n_dims: int | None = None, source: str | None = None,
-                 dims_name: str = "n_dims") -> np.ndarray:
+def check_frames(
+    X, field: str, *, n_dims: int | None = None, source: str | None = None, dims_name: str = "n_dims"
+) -> np.ndarray:
     """``X`` as a finite float array of shape (n_frames, n_dims).
 
     A 1-D input is one frame. Raises :class:`DataError` naming ``field`` and
@@ -42,13 +53,17 @@ def check_frames(X, field: str, *, n_dims: int | None = None, source: str | None
     if arr.shape[0] == 0 or arr.shape[1] == 0:
         raise DataError(source, field, arr.shape, "is empty")
     if n_dims is not None and arr.shape[1] != n_dims:
-        raise DataError(source, field, arr.shape,
-                        f"has {arr.shape[1]} columns but {dims_name} is {n_dims}")
+        raise DataError(source, field, arr.shape, f"has {arr.shape[1]} columns but {dims_name} is {n_dims}")
     bad = np.argwhere(~np.isfinite(arr))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise DataError(source, f"{field}[{i}, {j}]", float(arr[i, j]), "value is not finite",
-                        f"{len(bad)} non-finite value(s) in all")
+        raise DataError(
+            source,
+            f"{field}[{i}, {j}]",
+            float(arr[i, j]),
+            "value is not finite",
+            f"{len(bad)} non-finite value(s) in all",
+        )
     return arr
 
 
@@ -65,8 +80,9 @@ def check_bounds(bounds, n: int, field: str = "bounds") -> tuple[np.ndarray, np.
     bad = np.flatnonzero(lo >= hi)
     if bad.size:
         i = int(bad[0])
-        raise DataError(None, f"{field}[{i}]", (float(lo[i]), float(hi[i])),
-                        "lower bound must be below the upper bound")
+        raise DataError(
+            None, f"{field}[{i}]", (float(lo[i]), float(hi[i])), "lower bound must be below the upper bound"
+        )
     return lo, hi
 
 
@@ -77,14 +93,14 @@ def stack_frames(X, field: str = "X") -> np.ndarray:
     if isinstance(X, Utterance):
         return X.trajectory
     # np.ndim of an Utterance is 0: test the containers by type first.
-    if isinstance(X, (list, tuple)) and X and all(isinstance(x, (Utterance, Corpus)) or np.ndim(x) == 2
-                                                  for x in X):
+    if isinstance(X, (list, tuple)) and X and all(isinstance(x, (Utterance, Corpus)) or np.ndim(x) == 2 for x in X):
         return np.concatenate([stack_frames(x, f"{field}[{k}]") for k, x in enumerate(X)], axis=0)
     return check_frames(X, field)
 
 
-def map_trajectories(X, fn: Callable[[np.ndarray], np.ndarray], channels: Sequence[str],
-                     *, name_suffix: str | None = None):
+def map_trajectories(
+    X, fn: Callable[[np.ndarray], np.ndarray], channels: Sequence[str], *, name_suffix: str | None = None
+):
     """Apply ``fn`` (frames -> frames) to ``X``, keeping its container.
 
     An array gives an array; an Utterance an Utterance and a Corpus a Corpus
@@ -99,8 +115,7 @@ def map_trajectories(X, fn: Callable[[np.ndarray], np.ndarray], channels: Sequen
             meta["derived_by"] = name_suffix
         return Corpus(utts, name=X.name, metadata=meta, source=X.source)
     if isinstance(X, Utterance):
-        return Utterance(X.alignment, fn(X.trajectory), X.frame_rate, channels,
-                         audio=X.audio, name=X.name)
+        return Utterance(X.alignment, fn(X.trajectory), X.frame_rate, channels, audio=X.audio, name=X.name)
     if isinstance(X, list):
         return [map_trajectories(x, fn, channels) for x in X]
     return fn(X)
@@ -141,8 +156,9 @@ class LinearRig:
         neutral = np.asarray(neutral, dtype=float)
         if neutral.ndim != 1:
             raise DataError(None, "neutral", neutral.shape, "must be 1-D (n_dims,)")
-        self.neutral = check_frames(neutral, "neutral", n_dims=deltas.shape[1],
-                                    dims_name="the number of columns of deltas")[0]
+        self.neutral = check_frames(
+            neutral, "neutral", n_dims=deltas.shape[1], dims_name="the number of columns of deltas"
+        )[0]
         self.control_names = _names(control_names, deltas.shape[0], "c", "control_names")
         self.bounds = check_bounds(bounds, deltas.shape[0])
 
@@ -169,14 +185,14 @@ class LinearRig:
         return self.deltas.T
 
     @classmethod
-    def from_files(cls, deltas_path: str, neutral_path: str | None = None, **kw) -> "LinearRig":
+    def from_files(cls, deltas_path: str, neutral_path: str | None = None, **kw) -> LinearRig:
         """A rig from ``.npy``/``.csv`` files; no neutral file means a zero neutral."""
         deltas = load_matrix(deltas_path, "deltas")
         neutral = np.zeros(deltas.shape[1]) if neutral_path is None else load_matrix(neutral_path, "neutral").ravel()
         try:
             return cls(neutral, deltas, **kw)
         except DataError as exc:
-            raise name_source(exc, f"{deltas_path}" + (f", {neutral_path}" if neutral_path else ""))
+            raise name_source(exc, f"{deltas_path}" + (f", {neutral_path}" if neutral_path else "")) from None
 
 
 def as_rig(rig, n_controls: int | None = None, *, count_name: str = "n_controls"):
@@ -204,6 +220,7 @@ def check_fitted(estimator, attribute: str, how: str) -> None:
     """Raise :class:`~dam.NotFittedError` unless ``estimator`` has ``attribute`` (``how``: the call that sets it)."""
     if not hasattr(estimator, attribute):
         from dam.base import NotFittedError
+
         raise NotFittedError(f"this {type(estimator).__name__} is not fitted yet; call {how} first")
 
 
@@ -218,6 +235,7 @@ def name_source(exc: DataError, source) -> DataError:
 def load_matrix(path: str, field: str) -> np.ndarray:
     """A numeric matrix from ``.npy`` (never unpickled) or ``.csv`` (comma-separated, no header)."""
     import os
+
     if not os.path.exists(path):
         raise DataError(path, field, path, "file not found")
     try:

@@ -22,13 +22,13 @@ Regenerate (deterministic; about a minute on 2 cores)::
 
     python -m dam.datasets.default_model
 """
+
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-__all__ = ["DEFAULT_MODEL_PATH", "DEFAULT_DURATIONS_PATH", "DEFAULT_ALPHABET", "build_default_models",
-           "vtl_word_ids"]
+__all__ = ["DEFAULT_MODEL_PATH", "DEFAULT_DURATIONS_PATH", "DEFAULT_ALPHABET", "build_default_models", "vtl_word_ids"]
 
 _DATA = Path(__file__).parent / "data"
 #: The default animation model (a DAM on the vtl corpus).
@@ -52,6 +52,7 @@ def vtl_word_ids(split: str) -> tuple[list, list]:
 
     from dam.datasets import load, path
     from dam.datasets.vtl import SYMBOL_MAP, load_lexicon
+
     lexicon = {w.word: w.phones for w in load_lexicon()}
     corpus = load("vtl", split)
     meta = json.loads((path("vtl", split) / "corpus.json").read_text())["utterances"]
@@ -78,6 +79,7 @@ def build_default_models(out_dir=_DATA, *, verbose: bool = True) -> tuple[Path, 
     from dam.datasets import load
     from dam.model import DAM
     from dam.speech.durations import DurationModel
+
     out_dir = Path(out_dir)
     corpus = load("vtl", "train")
     t0 = time.perf_counter()
@@ -89,8 +91,10 @@ def build_default_models(out_dir=_DATA, *, verbose: bool = True) -> tuple[Path, 
     dam_model.save(model_path)
     durations.save(dur_path)
     if verbose:
-        print(f"DAM fitted in {t1 - t0:.1f} s -> {model_path} ({model_path.stat().st_size / 1024:.0f} KiB)",
-              file=sys.stderr)
+        print(
+            f"DAM fitted in {t1 - t0:.1f} s -> {model_path} ({model_path.stat().st_size / 1024:.0f} KiB)",
+            file=sys.stderr,
+        )
         print(f"durations -> {dur_path} ({dur_path.stat().st_size / 1024:.0f} KiB)", file=sys.stderr)
     return model_path, dur_path
 

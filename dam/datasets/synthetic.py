@@ -16,9 +16,10 @@ plain function. Deterministic for a seed.
 >>> len(corpus)
 5
 """
+
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -27,8 +28,14 @@ from dam.corpus.data import Alignment, Corpus, Utterance
 __all__ = ["random_alignment", "make_corpus", "dam_parameters"]
 
 
-def random_alignment(rng: np.random.Generator, phones: Sequence[str], *, n_segments=(8, 16),
-                     durations=(0.06, 0.18), source: str | None = None) -> Alignment:
+def random_alignment(
+    rng: np.random.Generator,
+    phones: Sequence[str],
+    *,
+    n_segments=(8, 16),
+    durations=(0.06, 0.18),
+    source: str | None = None,
+) -> Alignment:
     """A random phone sequence with random durations.
 
     Parameters
@@ -54,11 +61,20 @@ def random_alignment(rng: np.random.Generator, phones: Sequence[str], *, n_segme
     return Alignment(labels, ends - d, ends, source=source)
 
 
-def make_corpus(model, *, n_utterances: int = 20, phones: Sequence[str] | None = None,
-                n_segments=(8, 16), durations=(0.06, 0.18),
-                mode_rule: Callable[[str, str, str], int] | None = None, noise: float = 0.0,
-                frame_rate: float | None = None, channels: Sequence[str] | None = None,
-                random_state=0, name: str = "synthetic") -> Corpus:
+def make_corpus(
+    model,
+    *,
+    n_utterances: int = 20,
+    phones: Sequence[str] | None = None,
+    n_segments=(8, 16),
+    durations=(0.06, 0.18),
+    mode_rule: Callable[[str, str, str], int] | None = None,
+    noise: float = 0.0,
+    frame_rate: float | None = None,
+    channels: Sequence[str] | None = None,
+    random_state=0,
+    name: str = "synthetic",
+) -> Corpus:
     """Render a corpus from a known model.
 
     Parameters
@@ -95,14 +111,15 @@ def make_corpus(model, *, n_utterances: int = 20, phones: Sequence[str] | None =
     fr = float(frame_rate if frame_rate is not None else model.frame_rate_)
     if hasattr(model, "frame_rate_") and fr != float(model.frame_rate_):
         # a model renders frame i at i / its own frame rate: another rate would mislabel the times
-        raise ValueError(f"parameter 'frame_rate' is {frame_rate!r} but the model synthesizes at "
-                         f"{model.frame_rate_:g} Hz; leave it out or give a function")
+        raise ValueError(
+            f"parameter 'frame_rate' is {frame_rate!r} but the model synthesizes at "
+            f"{model.frame_rate_:g} Hz; leave it out or give a function"
+        )
     chans = list(channels if channels is not None else model.channels_)
     phones = list(phones if phones is not None else model.phones_)
     utts, all_modes = [], []
     for k in range(n_utterances):
-        a = random_alignment(rng, phones, n_segments=n_segments, durations=durations,
-                             source=f"{name}/utt{k:04d}")
+        a = random_alignment(rng, phones, n_segments=n_segments, durations=durations, source=f"{name}/utt{k:04d}")
         n = a.n_frames(fr)
         if mode_rule is not None:
             padded = [BOUNDARY, *a.labels, BOUNDARY]
@@ -116,15 +133,22 @@ def make_corpus(model, *, n_utterances: int = 20, phones: Sequence[str] | None =
         if noise > 0:
             y = y + rng.normal(0.0, noise, size=y.shape)
         utts.append(Utterance(a, y, fr, chans, name=f"utt{k:04d}"))
-    meta = {"generator": "dam.datasets.synthetic.make_corpus", "random_state": random_state,
-            "noise": noise}
+    meta = {"generator": "dam.datasets.synthetic.make_corpus", "random_state": random_state, "noise": noise}
     if mode_rule is not None:
         meta["modes"] = all_modes
     return Corpus(utts, name=name, metadata=meta)
 
 
-def dam_parameters(phones: Sequence[str], n_channels: int, *, degree: int = 4, n_modes=1,
-                   sigma_range=(0.2, 0.8), scale: float = 1.0, random_state=0) -> dict:
+def dam_parameters(
+    phones: Sequence[str],
+    n_channels: int,
+    *,
+    degree: int = 4,
+    n_modes=1,
+    sigma_range=(0.2, 0.8),
+    scale: float = 1.0,
+    random_state=0,
+) -> dict:
     """Random DAM parameters for :meth:`dam.model.DAM.from_parameters`.
 
     Animemes are drawn as shifted-Legendre coefficients decaying with order

@@ -11,6 +11,7 @@ Regenerate (identical for the same seed)::
 
     dam generate-tiny dam/datasets/data/tiny --overwrite
 """
+
 from __future__ import annotations
 
 import os
@@ -24,13 +25,20 @@ CHANNELS = ("lip_aperture", "lip_protrusion", "jaw_open", "tongue_tip")
 # phone: (targets per channel, stiffness in 1/s^2 of the tracking system)
 PHONES = {
     SILENCE: ((0.10, 0.00, 0.10, 0.20), 150.0),
-    "p": ((0.00, 0.20, 0.15, 0.20), 900.0), "b": ((0.00, 0.20, 0.15, 0.25), 900.0),
-    "m": ((0.00, 0.15, 0.15, 0.25), 800.0), "f": ((0.15, 0.00, 0.20, 0.20), 700.0),
-    "t": ((0.45, 0.05, 0.25, 1.00), 800.0), "d": ((0.45, 0.05, 0.25, 0.95), 800.0),
-    "s": ((0.35, 0.00, 0.20, 0.85), 700.0), "l": ((0.50, 0.05, 0.30, 0.90), 500.0),
-    "k": ((0.50, 0.05, 0.30, 0.20), 600.0), "sh": ((0.35, 0.70, 0.20, 0.70), 600.0),
-    "aa": ((0.90, 0.10, 0.90, 0.10), 300.0), "iy": ((0.50, 0.00, 0.35, 0.60), 300.0),
-    "uw": ((0.35, 0.90, 0.35, 0.30), 300.0), "eh": ((0.70, 0.05, 0.60, 0.40), 300.0),
+    "p": ((0.00, 0.20, 0.15, 0.20), 900.0),
+    "b": ((0.00, 0.20, 0.15, 0.25), 900.0),
+    "m": ((0.00, 0.15, 0.15, 0.25), 800.0),
+    "f": ((0.15, 0.00, 0.20, 0.20), 700.0),
+    "t": ((0.45, 0.05, 0.25, 1.00), 800.0),
+    "d": ((0.45, 0.05, 0.25, 0.95), 800.0),
+    "s": ((0.35, 0.00, 0.20, 0.85), 700.0),
+    "l": ((0.50, 0.05, 0.30, 0.90), 500.0),
+    "k": ((0.50, 0.05, 0.30, 0.20), 600.0),
+    "sh": ((0.35, 0.70, 0.20, 0.70), 600.0),
+    "aa": ((0.90, 0.10, 0.90, 0.10), 300.0),
+    "iy": ((0.50, 0.00, 0.35, 0.60), 300.0),
+    "uw": ((0.35, 0.90, 0.35, 0.30), 300.0),
+    "eh": ((0.70, 0.05, 0.60, 0.40), 300.0),
     "ao": ((0.75, 0.60, 0.75, 0.15), 300.0),
 }
 VOWELS = ("aa", "iy", "uw", "eh", "ao")
@@ -83,7 +91,7 @@ def generate(n_utterances=30, seed=0, noise=0.005) -> Corpus:
     for k in range(n_utterances):
         labels, starts, ends = [], [], []
         t = rng.uniform(0.15, 0.3)  # leading pause: a gap, written as an empty interval
-        for w in range(int(rng.integers(2, 4))):
+        for _w in range(int(rng.integers(2, 4))):
             for lab, d in _syllables(rng, int(rng.integers(1, 3))):
                 labels.append(lab)
                 starts.append(t)
@@ -96,8 +104,11 @@ def generate(n_utterances=30, seed=0, noise=0.005) -> Corpus:
         y = render(a.labels, a.starts, a.ends)
         y = y + noise * rng.standard_normal(y.shape)
         utts.append(Utterance(a, np.round(y, 5), FRAME_RATE, CHANNELS, name=f"tiny{k:03d}"))
-    return Corpus(utts, name="tiny", metadata={"generator": "dam.datasets.tiny", "seed": seed,
-                                               "units": dict.fromkeys(CHANNELS, "a.u.")})  # toy, arbitrary units
+    return Corpus(
+        utts,
+        name="tiny",
+        metadata={"generator": "dam.datasets.tiny", "seed": seed, "units": dict.fromkeys(CHANNELS, "a.u.")},
+    )  # toy, arbitrary units
 
 
 def write(directory, *, overwrite: bool = False, seed: int = 0) -> Corpus:
@@ -123,6 +134,7 @@ def write(directory, *, overwrite: bool = False, seed: int = 0) -> Corpus:
     """
     from dam.corpus.atomic import atomic_directory, atomic_write
     from dam.corpus.io import save_corpus
+
     corpus = generate(seed=seed)
     with atomic_directory(directory, overwrite=overwrite) as tmp:
         save_corpus(corpus, tmp, decimals=5)

@@ -14,6 +14,7 @@ phone identity recoverable from the spectrum, nothing more.
 >>> phone_tones(a, 16000).shape
 (8000,)
 """
+
 from __future__ import annotations
 
 import os

@@ -37,6 +37,7 @@ Regenerate the bundled corpus (same seed, same files)::
 Needs the ``vtl`` extra (``pip install dam[vtl]``): vocaltractlab-cython and
 scipy; pandas only for :func:`extract_articubench_lexicon`.
 """
+
 from __future__ import annotations
 
 import gzip
@@ -46,10 +47,10 @@ import os
 import shutil
 import sys
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -57,22 +58,76 @@ from dam.corpus.atomic import atomic_write
 from dam.corpus.data import Alignment, Corpus, DataError, Utterance
 
 __all__ = [
-    "VTL_CHANNELS", "VTL_UNITS", "VTL_PHONEMES", "SYMBOL_MAP", "VTL_STATE_RATE", "LEXICON_PATH",
-    "Word", "PhrasePlan", "load_lexicon", "extract_articubench_lexicon", "map_phones",
-    "import_vtl", "check_vtl_symbols", "probe_vtl_symbol", "split_words", "plan_phrases", "plan_corpus",
+    "VTL_CHANNELS",
+    "VTL_UNITS",
+    "VTL_PHONEMES",
+    "SYMBOL_MAP",
+    "VTL_STATE_RATE",
+    "LEXICON_PATH",
+    "Word",
+    "PhrasePlan",
+    "load_lexicon",
+    "extract_articubench_lexicon",
+    "map_phones",
+    "import_vtl",
+    "check_vtl_symbols",
+    "probe_vtl_symbol",
+    "split_words",
+    "plan_phrases",
+    "plan_corpus",
     "segment_file_text",
-    "read_tract_sequence", "resample_tract", "synthesize_phrase", "generate_vtl_corpus",
+    "read_tract_sequence",
+    "resample_tract",
+    "synthesize_phrase",
+    "generate_vtl_corpus",
 ]
 
 #: The 19 tract parameters of VTL's vocal tract model, in VTL's order.
-VTL_CHANNELS = ("HX", "HY", "JX", "JA", "LP", "LD", "VS", "VO", "TCX", "TCY",
-                "TTX", "TTY", "TBX", "TBY", "TRX", "TRY", "TS1", "TS2", "TS3")
+VTL_CHANNELS = (
+    "HX",
+    "HY",
+    "JX",
+    "JA",
+    "LP",
+    "LD",
+    "VS",
+    "VO",
+    "TCX",
+    "TCY",
+    "TTX",
+    "TTY",
+    "TBX",
+    "TBY",
+    "TRX",
+    "TRY",
+    "TS1",
+    "TS2",
+    "TS3",
+)
 
 #: Units of the tract parameters, as VTL's own parameter table gives them
 #: (``vocaltractlab_cython.get_param_info("tract")``; VS, the velum shape, has none).
-VTL_UNITS = {"HX": "cm", "HY": "cm", "JX": "cm", "JA": "deg", "LP": "cm", "LD": "cm", "VS": "", "VO": "cm²",
-             "TCX": "cm", "TCY": "cm", "TTX": "cm", "TTY": "cm", "TBX": "cm", "TBY": "cm", "TRX": "cm",
-             "TRY": "cm", "TS1": "cm", "TS2": "cm", "TS3": "cm"}
+VTL_UNITS = {
+    "HX": "cm",
+    "HY": "cm",
+    "JX": "cm",
+    "JA": "deg",
+    "LP": "cm",
+    "LD": "cm",
+    "VS": "",
+    "VO": "cm²",
+    "TCX": "cm",
+    "TCY": "cm",
+    "TTX": "cm",
+    "TTY": "cm",
+    "TBX": "cm",
+    "TBY": "cm",
+    "TRX": "cm",
+    "TRY": "cm",
+    "TS1": "cm",
+    "TS2": "cm",
+    "TS3": "cm",
+}
 
 #: VTL's audio rate and the audio samples per tract state: states come at 44100/110 = 400.9 Hz.
 VTL_AUDIO_RATE = 44100
@@ -83,21 +138,89 @@ VTL_STATE_RATE = VTL_AUDIO_RATE / VTL_SAMPLES_PER_STATE
 #: backend). Anything else is dropped without a word: no gesture, its time
 #: absorbed by its neighbours. Checked against the installed library by
 #: ``tests/test_vtl.py`` with :func:`probe_vtl_symbol`.
-VTL_PHONEMES = frozenset((
-    # vowels
-    "a:", "e:", "i:", "o:", "u:", "E:", "2:", "y:",
-    "a", "e", "i", "o", "u", "E", "2", "y",
-    "I", "O", "U", "9", "Y", "@", "6",
-    # diphthongs (German ones; English "eI", "oU" are unknown)
-    "aI", "aU", "OY",
-    "i:6", "i6", "I6", "y:6", "y6", "Y6", "e:6", "e6", "E6", "E:6",
-    "2:6", "26", "96", "a:6", "a6", "u:6", "u6", "U6", "o:6", "o6", "O6",
-    # plosives, fricatives, affricates, nasals and lateral
-    "?", "p", "b", "t", "d", "k", "g",
-    "f", "v", "T", "D", "s", "z", "S", "Z", "C", "j", "x", "r", "R", "h",
-    "pf", "ts", "tS", "dZ",
-    "m", "n", "N", "l",
-))
+VTL_PHONEMES = frozenset(
+    (
+        # vowels
+        "a:",
+        "e:",
+        "i:",
+        "o:",
+        "u:",
+        "E:",
+        "2:",
+        "y:",
+        "a",
+        "e",
+        "i",
+        "o",
+        "u",
+        "E",
+        "2",
+        "y",
+        "I",
+        "O",
+        "U",
+        "9",
+        "Y",
+        "@",
+        "6",
+        # diphthongs (German ones; English "eI", "oU" are unknown)
+        "aI",
+        "aU",
+        "OY",
+        "i:6",
+        "i6",
+        "I6",
+        "y:6",
+        "y6",
+        "Y6",
+        "e:6",
+        "e6",
+        "E6",
+        "E:6",
+        "2:6",
+        "26",
+        "96",
+        "a:6",
+        "a6",
+        "u:6",
+        "u6",
+        "U6",
+        "o:6",
+        "o6",
+        "O6",
+        # plosives, fricatives, affricates, nasals and lateral
+        "?",
+        "p",
+        "b",
+        "t",
+        "d",
+        "k",
+        "g",
+        "f",
+        "v",
+        "T",
+        "D",
+        "s",
+        "z",
+        "S",
+        "Z",
+        "C",
+        "j",
+        "x",
+        "r",
+        "R",
+        "h",
+        "pf",
+        "ts",
+        "tS",
+        "dZ",
+        "m",
+        "n",
+        "N",
+        "l",
+    )
+)
 
 #: Lexicon symbol -> VTL symbol. The articubench transcriptions write German
 #: short (lax) vowels without a length mark, as ``i e o u`` (``Abschnitte``
@@ -128,8 +251,9 @@ def import_vtl():
     try:
         import vocaltractlab_cython
     except ImportError as exc:  # pragma: no cover - depends on the install
-        raise ImportError("this needs VocalTractLab: pip install 'dam[vtl]' (vocaltractlab-cython); "
-                          f"import failed: {exc}") from None
+        raise ImportError(
+            f"this needs VocalTractLab: pip install 'dam[vtl]' (vocaltractlab-cython); import failed: {exc}"
+        ) from None
     return vocaltractlab_cython
 
 
@@ -137,6 +261,7 @@ def import_vtl():
 @dataclass(frozen=True)
 class Word:
     """One lexicon entry: orthography, SAMPA phones, mean phone durations (s)."""
+
     word: str
     phones: tuple
     durations: tuple
@@ -167,11 +292,16 @@ def extract_articubench_lexicon(pkl_path, out_path=LEXICON_PATH) -> int:
         phones = [str(p) for p in rec.phones]
         durs = [float(d) for d in np.ravel(durs)]
         if len(durs) != len(phones) or not phones:
-            raise DataError(pkl_path, f"row {k} ({rec.label!r}) phone_durations", len(durs),
-                            f"{len(phones)} phones but {len(durs)} durations")
+            raise DataError(
+                pkl_path,
+                f"row {k} ({rec.label!r}) phone_durations",
+                len(durs),
+                f"{len(phones)} phones but {len(durs)} durations",
+            )
         if not all(math.isfinite(d) and d > 0 for d in durs):
-            raise DataError(pkl_path, f"row {k} ({rec.label!r}) phone_durations", durs,
-                            "durations must be positive and finite")
+            raise DataError(
+                pkl_path, f"row {k} ({rec.label!r}) phone_durations", durs, "durations must be positive and finite"
+            )
         rows.append(f"{rec.label}\t{' '.join(phones)}\t{' '.join(f'{d:.4f}' for d in durs)}\n")
     text = "word\tphones\tdurations_s\n" + "".join(rows)
     out_path = Path(out_path)
@@ -203,11 +333,16 @@ def load_lexicon(path=LEXICON_PATH) -> list[Word]:
             except ValueError:
                 raise DataError(path, f"line {lineno} durations_s", parts[2], "not numbers") from None
             if len(durs) != len(phones) or not phones:
-                raise DataError(path, f"line {lineno} ({parts[0]!r})", (len(phones), len(durs)),
-                                "phones and durations differ in number")
+                raise DataError(
+                    path,
+                    f"line {lineno} ({parts[0]!r})",
+                    (len(phones), len(durs)),
+                    "phones and durations differ in number",
+                )
             if not all(math.isfinite(d) and d > 0 for d in durs):
-                raise DataError(path, f"line {lineno} ({parts[0]!r}) durations_s", parts[2],
-                                "durations must be positive and finite")
+                raise DataError(
+                    path, f"line {lineno} ({parts[0]!r}) durations_s", parts[2], "durations must be positive and finite"
+                )
             words.append(Word(parts[0], phones, durs))
     return words
 
@@ -219,10 +354,14 @@ def check_vtl_symbols(phones: Sequence[str], *, source=None) -> None:
     """
     for i, p in enumerate(phones):
         if p not in VTL_PHONEMES:
-            raise DataError(source, f"phone {i}", p,
-                            "not a VocalTractLab segment symbol (VTL would drop it silently)",
-                            "map it to a known German SAMPA symbol in SYMBOL_MAP or the mapping "
-                            f"argument; known: {' '.join(sorted(VTL_PHONEMES))}")
+            raise DataError(
+                source,
+                f"phone {i}",
+                p,
+                "not a VocalTractLab segment symbol (VTL would drop it silently)",
+                "map it to a known German SAMPA symbol in SYMBOL_MAP or the mapping "
+                f"argument; known: {' '.join(sorted(VTL_PHONEMES))}",
+            )
 
 
 def map_phones(phones: Sequence[str], mapping: dict | None = None, *, source=None) -> tuple:
@@ -276,6 +415,7 @@ class PhrasePlan:
     audio : bool
         Whether to synthesize audio too.
     """
+
     name: str
     words: tuple
     labels: tuple
@@ -292,11 +432,23 @@ def split_words(words: Sequence[Word], test_fraction: float, rng) -> tuple[list[
     return [words[i] for i in sorted(perm[n_test:])], [words[i] for i in sorted(perm[:n_test])]
 
 
-def plan_phrases(words: Sequence[Word], *, minutes: float, rng, prefix: str = "utt",
-                 words_per_phrase=(2, 6), rate=(0.8, 1.3), jitter: float = 0.1,
-                 pause_prob: float = 0.2, pause=(0.1, 0.35), edge=(0.15, 0.3),
-                 min_phone: float = 0.03, max_phone: float = 0.35, audio_fraction: float = 0.0,
-                 mapping: dict | None = None) -> list[PhrasePlan]:
+def plan_phrases(
+    words: Sequence[Word],
+    *,
+    minutes: float,
+    rng,
+    prefix: str = "utt",
+    words_per_phrase=(2, 6),
+    rate=(0.8, 1.3),
+    jitter: float = 0.1,
+    pause_prob: float = 0.2,
+    pause=(0.1, 0.35),
+    edge=(0.15, 0.3),
+    min_phone: float = 0.03,
+    max_phone: float = 0.35,
+    audio_fraction: float = 0.0,
+    mapping: dict | None = None,
+) -> list[PhrasePlan]:
     """Draw phrases until their total duration reaches ``minutes``.
 
     Words are drawn without replacement (a new shuffled pass when the list
@@ -363,8 +515,17 @@ def plan_phrases(words: Sequence[Word], *, minutes: float, rng, prefix: str = "u
         labels.append("")
         durs.append(float(rng.uniform(*edge)))
         durs = tuple(round(d, 3) for d in durs)
-        plans.append(PhrasePlan(f"{prefix}{len(plans):04d}", tuple(words[i].word for i in picked),
-                                tuple(labels), durs, tuple(starts), round(r, 4), False))
+        plans.append(
+            PhrasePlan(
+                f"{prefix}{len(plans):04d}",
+                tuple(words[i].word for i in picked),
+                tuple(labels),
+                durs,
+                tuple(starts),
+                round(r, 4),
+                False,
+            )
+        )
         total += sum(durs)
     # Audio for an exact, evenly spread share of the phrases (at least one when asked for):
     # a random draw could leave a small test part without any.
@@ -406,8 +567,9 @@ def read_tract_sequence(path) -> np.ndarray:
     try:
         n = int(lines[1])
     except (IndexError, ValueError):
-        raise DataError(path, "number of states", lines[1] if len(lines) > 1 else None,
-                        "not a VTL tract sequence file") from None
+        raise DataError(
+            path, "number of states", lines[1] if len(lines) > 1 else None, "not a VTL tract sequence file"
+        ) from None
     body = lines[2:]
     if len(body) != 2 * n:
         raise DataError(path, "states", len(body) // 2, f"the header announces {n} states")
@@ -433,8 +595,7 @@ def resample_tract(states: np.ndarray, frame_rate: float) -> np.ndarray:
     return resample_poly(states, ratio.numerator, ratio.denominator, axis=0, padtype="line")
 
 
-def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate: int = 16000,
-                      workdir=None) -> dict:
+def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate: int = 16000, workdir=None) -> dict:
     """Run VTL on one phrase.
 
     Returns
@@ -459,6 +620,7 @@ def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate
         audio = None
         if plan.audio:
             from scipy.signal import resample_poly
+
             wave = vtl.gesture_file_to_audio(ges)
             r = Fraction(audio_rate, VTL_AUDIO_RATE)
             wave = resample_poly(wave, r.numerator, r.denominator)
@@ -468,15 +630,27 @@ def synthesize_phrase(plan: PhrasePlan, *, frame_rate: float = 100.0, audio_rate
     traj = resample_tract(states, frame_rate)
     n = alignment.n_frames(frame_rate)
     if len(traj) < n:
-        raise DataError(plan.name, "tract sequence", f"{len(states)} states",
-                        f"VTL returned {len(traj)} frames at {frame_rate:g} Hz, the alignment needs {n}")
-    return {"name": plan.name, "alignment": alignment, "trajectory": traj[:n], "audio": audio,
-            "n_states": len(states)}
+        raise DataError(
+            plan.name,
+            "tract sequence",
+            f"{len(states)} states",
+            f"VTL returned {len(traj)} frames at {frame_rate:g} Hz, the alignment needs {n}",
+        )
+    return {"name": plan.name, "alignment": alignment, "trajectory": traj[:n], "audio": audio, "n_states": len(states)}
 
 
 # -- writing --------------------------------------------------------------
-def _write_split(results: list[dict], plans: list[PhrasePlan], directory: Path, *, frame_rate: float,
-                 trajectory_format: str, decimals: int, audio_rate: int, metadata: dict) -> Corpus:
+def _write_split(
+    results: list[dict],
+    plans: list[PhrasePlan],
+    directory: Path,
+    *,
+    frame_rate: float,
+    trajectory_format: str,
+    decimals: int,
+    audio_rate: int,
+    metadata: dict,
+) -> Corpus:
     from scipy.io import wavfile
 
     from dam.corpus.io import write_csv, write_npy, write_textgrid
@@ -499,9 +673,13 @@ def _write_split(results: list[dict], plans: list[PhrasePlan], directory: Path, 
             with atomic_write(audio, "wb") as fh:
                 wavfile.write(fh, audio_rate, res["audio"])
         utts.append(Utterance(res["alignment"], traj, frame_rate, VTL_CHANNELS, audio=audio, name=stem))
-    meta = {"frame_rate": frame_rate, "channels": list(VTL_CHANNELS), "units": dict(VTL_UNITS), **metadata,
-            "utterances": {p.name: {"words": list(p.words), "rate": p.rate, "audio": p.audio}
-                           for p in plans}}
+    meta = {
+        "frame_rate": frame_rate,
+        "channels": list(VTL_CHANNELS),
+        "units": dict(VTL_UNITS),
+        **metadata,
+        "utterances": {p.name: {"words": list(p.words), "rate": p.rate, "audio": p.audio} for p in plans},
+    }
     with atomic_write(directory / "corpus.json", "w", encoding="utf-8") as fh:
         fh.write(json.dumps(meta, indent=1, ensure_ascii=False) + "\n")
     return Corpus(utts, name=metadata.get("name"), metadata=meta, source=str(directory))
@@ -518,9 +696,17 @@ def _run(plans, *, frame_rate, audio_rate, n_jobs, verbose, desc):
     return list(tqdm(stream, total=len(plans), desc=desc, disable=not show, file=sys.stderr))
 
 
-def plan_corpus(*, seed: int = 0, n_train_minutes: float = 10.0, n_test_minutes: float = 2.5,
-                test_word_fraction: float = 0.2, audio_fraction: float = 0.05, lexicon=None,
-                mapping: dict | None = None, **plan_options) -> tuple[dict, dict]:
+def plan_corpus(
+    *,
+    seed: int = 0,
+    n_train_minutes: float = 10.0,
+    n_test_minutes: float = 2.5,
+    test_word_fraction: float = 0.2,
+    audio_fraction: float = 0.05,
+    lexicon=None,
+    mapping: dict | None = None,
+    **plan_options,
+) -> tuple[dict, dict]:
     """The phrases :func:`generate_vtl_corpus` synthesizes for these arguments.
 
     Returns
@@ -534,20 +720,47 @@ def plan_corpus(*, seed: int = 0, n_train_minutes: float = 10.0, n_test_minutes:
     rng = np.random.default_rng(seed)
     train_words, test_words = split_words(words, test_word_fraction, rng)
     plans = {
-        "train": plan_phrases(train_words, minutes=n_train_minutes, rng=rng, prefix="train",
-                              audio_fraction=audio_fraction, mapping=mapping, **plan_options),
-        "test": plan_phrases(test_words, minutes=n_test_minutes, rng=rng, prefix="test",
-                             audio_fraction=audio_fraction, mapping=mapping, **plan_options),
+        "train": plan_phrases(
+            train_words,
+            minutes=n_train_minutes,
+            rng=rng,
+            prefix="train",
+            audio_fraction=audio_fraction,
+            mapping=mapping,
+            **plan_options,
+        ),
+        "test": plan_phrases(
+            test_words,
+            minutes=n_test_minutes,
+            rng=rng,
+            prefix="test",
+            audio_fraction=audio_fraction,
+            mapping=mapping,
+            **plan_options,
+        ),
     }
     return plans, {"train": len(train_words), "test": len(test_words)}
 
 
-def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0,
-                        n_test_minutes: float = 2.5, test_word_fraction: float = 0.2,
-                        frame_rate: float = 100.0, audio_fraction: float = 0.05,
-                        audio_rate: int = 16000, trajectory_format: str = "npy", decimals: int = 5,
-                        n_jobs: int = 1, verbose: int = 1, overwrite: bool = False,
-                        lexicon=None, mapping: dict | None = None, **plan_options) -> dict[str, Corpus]:
+def generate_vtl_corpus(
+    out_dir,
+    *,
+    seed: int = 0,
+    n_train_minutes: float = 10.0,
+    n_test_minutes: float = 2.5,
+    test_word_fraction: float = 0.2,
+    frame_rate: float = 100.0,
+    audio_fraction: float = 0.05,
+    audio_rate: int = 16000,
+    trajectory_format: str = "npy",
+    decimals: int = 5,
+    n_jobs: int = 1,
+    verbose: int = 1,
+    overwrite: bool = False,
+    lexicon=None,
+    mapping: dict | None = None,
+    **plan_options,
+) -> dict[str, Corpus]:
     """Generate a VocalTractLab corpus with ``train/`` and ``test/`` parts.
 
     Parameters
@@ -597,35 +810,65 @@ def generate_vtl_corpus(out_dir, *, seed: int = 0, n_train_minutes: float = 10.0
     out = Path(out_dir)
     full = [out / split for split in ("train", "test") if (out / split).exists() and any((out / split).iterdir())]
     if full and not overwrite:
-        raise DataError(str(full[0]), "out_dir", str(full[0]), "exists and is not empty",
-                        "pass overwrite=True (--overwrite) to replace it")
+        raise DataError(
+            str(full[0]),
+            "out_dir",
+            str(full[0]),
+            "exists and is not empty",
+            "pass overwrite=True (--overwrite) to replace it",
+        )
     # Plan (and check every symbol) before anything is deleted: a bad lexicon must not cost the old corpus.
-    plans, n_words = plan_corpus(seed=seed, n_train_minutes=n_train_minutes, n_test_minutes=n_test_minutes,
-                                 test_word_fraction=test_word_fraction, audio_fraction=audio_fraction,
-                                 lexicon=lexicon, mapping=mapping, **plan_options)
+    plans, n_words = plan_corpus(
+        seed=seed,
+        n_train_minutes=n_train_minutes,
+        n_test_minutes=n_test_minutes,
+        test_word_fraction=test_word_fraction,
+        audio_fraction=audio_fraction,
+        lexicon=lexicon,
+        mapping=mapping,
+        **plan_options,
+    )
     for d in full:
         shutil.rmtree(d)
     version = vtl.get_version()
     corpora = {}
     for split, split_plans in plans.items():
-        results = _run(split_plans, frame_rate=frame_rate, audio_rate=audio_rate, n_jobs=n_jobs,
-                       verbose=verbose, desc=f"vtl {split}")
+        results = _run(
+            split_plans,
+            frame_rate=frame_rate,
+            audio_rate=audio_rate,
+            n_jobs=n_jobs,
+            verbose=verbose,
+            desc=f"vtl {split}",
+        )
         meta = {
-            "name": f"vtl-{split}", "split": split, "generator": "dam.datasets.vtl", "seed": seed,
+            "name": f"vtl-{split}",
+            "split": split,
+            "generator": "dam.datasets.vtl",
+            "seed": seed,
             "vtl_version": f"vocaltractlab-cython {_package_version()}, {version}",
-            "speaker": "JD3", "lexicon": "articubench 0.3.5 data/lexical_embedding_vectors.pkl",
+            "speaker": "JD3",
+            "lexicon": "articubench 0.3.5 data/lexical_embedding_vectors.pkl",
             "symbol_map": dict(SYMBOL_MAP if mapping is None else mapping),
             "n_words": n_words[split],
             "licence": LICENCE_NOTE,
         }
-        corpora[split] = _write_split(results, split_plans, out / split, frame_rate=frame_rate,
-                                      trajectory_format=trajectory_format, decimals=decimals,
-                                      audio_rate=audio_rate, metadata=meta)
+        corpora[split] = _write_split(
+            results,
+            split_plans,
+            out / split,
+            frame_rate=frame_rate,
+            trajectory_format=trajectory_format,
+            decimals=decimals,
+            audio_rate=audio_rate,
+            metadata=meta,
+        )
     return corpora
 
 
 def _package_version() -> str:
     from importlib.metadata import PackageNotFoundError, version
+
     try:
         return version("vocaltractlab-cython")
     except PackageNotFoundError:
@@ -670,15 +913,13 @@ def audio_priority(n: int, first=()) -> list[int]:
     return head + [i for i in rev if i < n and i not in seen]
 
 
-def synthesize_audio(plan: PhrasePlan, *, audio_rate: int = 16000, frame_rate: float = 100.0,
-                     workdir=None) -> dict:
+def synthesize_audio(plan: PhrasePlan, *, audio_rate: int = 16000, frame_rate: float = 100.0, workdir=None) -> dict:
     """VTL audio of one phrase (deterministic: a pure function of the plan).
 
     Returns :func:`synthesize_phrase`'s dict (its ``trajectory`` too, so the
     caller can prove the phrase is the one on disk).
     """
-    return synthesize_phrase(replace(plan, audio=True), frame_rate=frame_rate, audio_rate=audio_rate,
-                             workdir=workdir)
+    return synthesize_phrase(replace(plan, audio=True), frame_rate=frame_rate, audio_rate=audio_rate, workdir=workdir)
 
 
 def write_flac(path, samples: np.ndarray, audio_rate: int) -> None:
@@ -691,9 +932,18 @@ def write_flac(path, samples: np.ndarray, audio_rate: int) -> None:
         soundfile.write(fh, np.asarray(samples, np.int16), int(audio_rate), format="FLAC", subtype="PCM_16")
 
 
-def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None = None,
-                  deadline: float | None = None, audio_rate: int = 16000, verbose: int = 1,
-                  splits=("train", "test"), lexicon=None, mapping: dict | None = None) -> dict:
+def add_vtl_audio(
+    root,
+    *,
+    fraction: float = 1.0,
+    max_cpu_seconds: float | None = None,
+    deadline: float | None = None,
+    audio_rate: int = 16000,
+    verbose: int = 1,
+    splits=("train", "test"),
+    lexicon=None,
+    mapping: dict | None = None,
+) -> dict:
     """Give (more of) a generated vtl corpus its audio, in place; cached and resumable.
 
     The phrases are planned again from the seed in ``corpus.json`` (the plans
@@ -755,20 +1005,27 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
             raise DataError(str(d), "corpus.json", None, "no such file: not a generated vtl corpus split")
         meta = json.loads(meta_path.read_text(encoding="utf-8"))
         frame_rate = float(meta["frame_rate"])
-        plans, _ = plan_corpus(seed=int(meta.get("seed", 0)), lexicon=lexicon,
-                               mapping=mapping if mapping is not None else meta.get("symbol_map"))
+        plans, _ = plan_corpus(
+            seed=int(meta.get("seed", 0)),
+            lexicon=lexicon,
+            mapping=mapping if mapping is not None else meta.get("symbol_map"),
+        )
         plans = plans[split]
         stored = meta.get("utterances", {})
-        if [p.name for p in plans] != list(stored) or any(
-                list(p.words) != stored[p.name]["words"] for p in plans):
-            raise DataError(str(meta_path), "utterances", f"{len(stored)} phrases",
-                            f"seed {meta.get('seed')} with the default sizes does not plan these phrases; "
-                            "regenerate the corpus with the audio share you need instead (--audio-fraction)")
+        if [p.name for p in plans] != list(stored) or any(list(p.words) != stored[p.name]["words"] for p in plans):
+            raise DataError(
+                str(meta_path),
+                "utterances",
+                f"{len(stored)} phrases",
+                f"seed {meta.get('seed')} with the default sizes does not plan these phrases; "
+                "regenerate the corpus with the audio share you need instead (--audio-fraction)",
+            )
         # Old WAVs become FLAC (same int16 samples): one audio format per corpus.
         for p in plans:
             wav = d / f"{p.name}.wav"
             if wav.exists() and not (d / f"{p.name}{AUDIO_SUFFIX}").exists():
                 from scipy.io import wavfile
+
                 sr, x = wavfile.read(wav)
                 if sr != audio_rate:
                     raise DataError(str(wav), "sample rate", sr, f"expected {audio_rate} Hz")
@@ -797,11 +1054,19 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
                     # when duration x frame rate fell a rounding error short of a whole frame.
                     old = np.load(npy)
                     new = res["trajectory"].astype(np.float32)
-                    if (old.ndim != 2 or old.shape[1] != new.shape[1] or not 0 <= len(new) - len(old) <= 1
-                            or old.tobytes() != new[:len(old)].tobytes()):
-                        raise DataError(str(npy), "trajectory", p.name,
-                                        "VTL does not reproduce the stored trajectory bit for bit; the audio "
-                                        "would not belong to it (another VTL version?)")
+                    if (
+                        old.ndim != 2
+                        or old.shape[1] != new.shape[1]
+                        or not 0 <= len(new) - len(old) <= 1
+                        or old.tobytes() != new[: len(old)].tobytes()
+                    ):
+                        raise DataError(
+                            str(npy),
+                            "trajectory",
+                            p.name,
+                            "VTL does not reproduce the stored trajectory bit for bit; the audio "
+                            "would not belong to it (another VTL version?)",
+                        )
                 write_flac(d / f"{p.name}{AUDIO_SUFFIX}", res["audio"], audio_rate)
                 added += 1
                 bar.update(1)
@@ -813,7 +1078,9 @@ def add_vtl_audio(root, *, fraction: float = 1.0, max_cpu_seconds: float | None 
         with atomic_write(meta_path, "w", encoding="utf-8") as fh:
             fh.write(json.dumps(meta, indent=1, ensure_ascii=False) + "\n")
         report[split] = {
-            "n": len(plans), "audio": len(on_disk), "added": added,
+            "n": len(plans),
+            "audio": len(on_disk),
+            "added": added,
             "seconds": float(sum(sum(p.durations) for p in plans if p.name in on_disk)),
             "bytes": int(sum((d / f"{n}{AUDIO_SUFFIX}").stat().st_size for n in on_disk)),
         }

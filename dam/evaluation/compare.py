@@ -41,6 +41,7 @@ per model), ``per_channel.csv``, ``per_utterance.csv``, ``summary.md`` (a
 Markdown table), ``predictions.png`` (predictions against the truth for one
 test utterance) and ``rmse.png`` (RMSE per model with 95% intervals).
 """
+
 from __future__ import annotations
 
 import os
@@ -56,12 +57,34 @@ from dam.corpus.data import Corpus
 from dam.evaluation.report import SUMMARY_COLUMNS, ModelScore, markdown_table, plot_report, write_report
 from dam.evaluation.statistics import bootstrap_rmse_ci, holm, tests_against
 
-__all__ = ["compare", "ComparisonResult", "ModelScore", "Task", "TaskResult", "ComparisonPlan", "plan_comparison",
-           "run_tasks", "score_results", "holm", "bootstrap_rmse_ci", "run_demo", "demo_plan", "DEMO_MODELS",
-           "SUMMARY_COLUMNS"]
+__all__ = [
+    "compare",
+    "ComparisonResult",
+    "ModelScore",
+    "Task",
+    "TaskResult",
+    "ComparisonPlan",
+    "plan_comparison",
+    "run_tasks",
+    "score_results",
+    "holm",
+    "bootstrap_rmse_ci",
+    "run_demo",
+    "demo_plan",
+    "DEMO_MODELS",
+    "SUMMARY_COLUMNS",
+]
 
-DEMO_MODELS = ("phone-mean", "target-interpolation", "dam", "dam-m0", "cohen-massaro", "mmm", "dtree",
-               ("dtree-linguistic", "dtree", {"features": "linguistic"}))
+DEMO_MODELS = (
+    "phone-mean",
+    "target-interpolation",
+    "dam",
+    "dam-m0",
+    "cohen-massaro",
+    "mmm",
+    "dtree",
+    ("dtree-linguistic", "dtree", {"features": "linguistic"}),
+)
 
 
 # -- the result ---------------------------------------------------------------
@@ -125,9 +148,20 @@ class ComparisonResult:
 # -- planning -------------------------------------------------------------------
 #: Expected fit cost relative to the DAM's (the demo's measured fit seconds), for the ETA of a
 #: comparison: the cheap references finish first and must not make the rest look short.
-EXPECTED_FIT_COST = {"phone-mean": 0.01, "target-interpolation": 0.01, "dam": 1.0, "dam-m0": 0.2,
-                     "cohen-massaro": 1.0, "mmm": 0.6, "dtree": 0.3, "sliding-dnn": 2.0, "causal-mlp": 1.0,
-                     "lstm": 5.0, "gru": 2.0, "transformer": 5.0}
+EXPECTED_FIT_COST = {
+    "phone-mean": 0.01,
+    "target-interpolation": 0.01,
+    "dam": 1.0,
+    "dam-m0": 0.2,
+    "cohen-massaro": 1.0,
+    "mmm": 0.6,
+    "dtree": 0.3,
+    "sliding-dnn": 2.0,
+    "causal-mlp": 1.0,
+    "lstm": 5.0,
+    "gru": 2.0,
+    "transformer": 5.0,
+}
 
 
 def expected_fit_cost(model) -> float:
@@ -194,27 +228,34 @@ def _check_specs(specs) -> None:
     A model whose optional dependency is missing passes: it is listed as skipped, with the reason.
     """
     from dam.registry import available, check_params, get, names
+
     known = names()
     for label, name, params, est in specs:
         if est is not None:
             check_params(est)
             continue
         if name not in known:
-            raise KeyError(f"unknown model {name!r}" + (f" (row {label!r})" if label != name else "")
-                           + f"; known models: {', '.join(known)} (see `dam models`)")
+            raise KeyError(
+                f"unknown model {name!r}"
+                + (f" (row {label!r})" if label != name else "")
+                + f"; known models: {', '.join(known)} (see `dam models`)"
+            )
         if not available(name)[0]:
             continue
         cls = get(name)
         bad = sorted(set(params) - set(cls._param_names()))
         if bad:
-            raise ValueError(f"model {label!r} ({cls.__name__}): unknown parameter(s) {bad}; "
-                             f"valid parameters are {cls._param_names()}")
+            raise ValueError(
+                f"model {label!r} ({cls.__name__}): unknown parameter(s) {bad}; "
+                f"valid parameters are {cls._param_names()}"
+            )
         check_params(cls(**params))
 
 
 def _model_specs(models) -> list[tuple[str, str | None, dict, object]]:
     """(label, registry name, params, estimator or None) for every requested model."""
     from dam.base import Synthesizer
+
     if isinstance(models, str):
         models = [m.strip() for m in models.split(",") if m.strip()]
     if isinstance(models, dict):
@@ -247,12 +288,14 @@ def _as_corpus(spec) -> Corpus:
     if isinstance(spec, Corpus):
         return spec
     from dam.datasets import resolve
+
     return resolve(spec)
 
 
 def _audio_models(specs) -> list[str]:
     """Labels of the models that read audio (a model that cannot be built is left to its task)."""
     from dam.registry import get
+
     out = []
     for label, name, params, est in specs:
         try:
@@ -267,20 +310,37 @@ def _audio_models(specs) -> list[str]:
 def _with_audio(corpus: Corpus, audio_models: list[str]) -> Corpus:
     """The utterances of ``corpus`` that have audio; says on stderr when that drops some."""
     from dam.corpus.data import DataError
+
     keep = [i for i, u in enumerate(corpus) if u.audio is not None]
     if not keep:
-        raise DataError(corpus.source, "audio", corpus[0].name,
-                        f"no utterance of this corpus has audio, and {', '.join(audio_models)} read(s) audio")
+        raise DataError(
+            corpus.source,
+            "audio",
+            corpus[0].name,
+            f"no utterance of this corpus has audio, and {', '.join(audio_models)} read(s) audio",
+        )
     if len(keep) < len(corpus):
-        print(f"compare: {', '.join(audio_models)} read(s) audio: every model is trained and scored on the "
-              f"{len(keep)} of {len(corpus)} utterances of {corpus.name or corpus.source} that have audio",
-              file=sys.stderr)
+        print(
+            f"compare: {', '.join(audio_models)} read(s) audio: every model is trained and scored on the "
+            f"{len(keep)} of {len(corpus)} utterances of {corpus.name or corpus.source} that have audio",
+            file=sys.stderr,
+        )
         corpus = corpus.subset(keep)
     return corpus
 
 
-def plan_comparison(models, train, test=None, cv: int | None = None, out=None, *, test_size: float = 0.25,
-                    random_state: int = 0, unknown_phone: str | None = "fallback", channels=None) -> ComparisonPlan:
+def plan_comparison(
+    models,
+    train,
+    test=None,
+    cv: int | None = None,
+    out=None,
+    *,
+    test_size: float = 0.25,
+    random_state: int = 0,
+    unknown_phone: str | None = "fallback",
+    channels=None,
+) -> ComparisonPlan:
     """Check everything that can be checked before a fit and build the tasks.
 
     Parameters are those of :func:`compare`. Unknown model names and bad
@@ -296,8 +356,7 @@ def plan_comparison(models, train, test=None, cv: int | None = None, out=None, *
     _check_specs(specs)  # a typo in a name or a parameter fails now, not after the other fits
     train = _as_corpus(train)
     if out is not None:  # checked before any fit: never into an input corpus, never over a corpus
-        inputs = [train.source] + ([test] if isinstance(test, (str, os.PathLike)) else
-                                   [getattr(test, "source", None)])
+        inputs = [train.source] + ([test] if isinstance(test, (str, os.PathLike)) else [getattr(test, "source", None)])
         check_output(out, inputs=inputs, directory=True, merge=True, option="out")
         os.makedirs(out, exist_ok=True)
     if channels is not None:
@@ -322,14 +381,19 @@ def plan_comparison(models, train, test=None, cv: int | None = None, out=None, *
         folds = [train.train_test_split(test_size, random_state=random_state)]
         where = f"{train.name or train.source or 'corpus'} (hold-out {test_size:g})"
     if tuple(folds[0][1].channels) != tuple(folds[0][0].channels):
-        raise ValueError(f"train and test channels differ: {list(folds[0][0].channels)} vs "
-                         f"{list(folds[0][1].channels)}")
+        raise ValueError(
+            f"train and test channels differ: {list(folds[0][0].channels)} vs {list(folds[0][1].channels)}"
+        )
     if folds[0][1].frame_rate != folds[0][0].frame_rate:
         # models predict at the training frame rate: scores against another rate would be meaningless
-        raise ValueError(f"train and test frame rates differ: {folds[0][0].frame_rate:g} Hz vs "
-                         f"{folds[0][1].frame_rate:g} Hz")
-    tasks = [Task(label, name, params, est, k, tr, te, unknown_phone) for label, name, params, est in specs
-             for k, (tr, te) in enumerate(folds)]
+        raise ValueError(
+            f"train and test frame rates differ: {folds[0][0].frame_rate:g} Hz vs {folds[0][1].frame_rate:g} Hz"
+        )
+    tasks = [
+        Task(label, name, params, est, k, tr, te, unknown_phone)
+        for label, name, params, est in specs
+        for k, (tr, te) in enumerate(folds)
+    ]
     return ComparisonPlan(specs=specs, folds=folds, where=where, tasks=tasks)
 
 
@@ -370,6 +434,7 @@ def run_task(task: Task) -> TaskResult:
     """Fit one model on one fold and predict its test part (runs in a joblib worker)."""
     from dam.base import predict_inputs
     from dam.registry import available, get
+
     res = TaskResult(task.label, task.fold)
     params = task.params
     try:
@@ -380,10 +445,10 @@ def run_task(task: Task) -> TaskResult:
             model = get(task.name)(**params)
         else:
             from dam.base import clone
+
             model = clone(task.estimator)
             params = task.estimator.get_params()  # an instance keeps all its own settings
-        if (task.unknown_phone is not None and "unknown_phone" in model.get_params()
-                and "unknown_phone" not in params):
+        if task.unknown_phone is not None and "unknown_phone" in model.get_params() and "unknown_phone" not in params:
             model.set_params(unknown_phone=task.unknown_phone)
         t0 = time.perf_counter()
         model.fit(task.train)
@@ -413,8 +478,9 @@ def _not_ok(res: TaskResult, status: str, reason: str) -> TaskResult:
     return TaskResult(res.model, res.fold, status=status, reason=reason)
 
 
-def run_tasks(plan: ComparisonPlan, n_jobs: int = 1,
-              progress: Callable[[TaskResult, int, int], None] | None = None) -> list[TaskResult]:
+def run_tasks(
+    plan: ComparisonPlan, n_jobs: int = 1, progress: Callable[[TaskResult, int, int], None] | None = None
+) -> list[TaskResult]:
     """Run every task of ``plan`` through joblib; results in the order they finish.
 
     Parameters
@@ -432,6 +498,7 @@ def run_tasks(plan: ComparisonPlan, n_jobs: int = 1,
     from joblib import Parallel, delayed
 
     from dam.progress import task as progress_task
+
     tasks = plan.tasks
     try:
         parallel = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
@@ -440,20 +507,23 @@ def run_tasks(plan: ComparisonPlan, n_jobs: int = 1,
     index = {(t.label, t.fold): i for i, t in enumerate(tasks)}
     several = len(plan.folds) > 1
     results = []
-    with progress_task("compare", weights=[expected_fit_cost(t.name or t.estimator) for t in tasks],
-                        unit="fold" if several else "fit") as bar:
+    with progress_task(
+        "compare", weights=[expected_fit_cost(t.name or t.estimator) for t in tasks], unit="fold" if several else "fit"
+    ) as bar:
         for r in parallel(delayed(run_task)(t) for t in tasks):
             results.append(r)
-            bar.step(f"{r.model}" + (f" fold {r.fold}" if several else "") + f": {r.status}",
-                     index=index[(r.model, r.fold)])
+            bar.step(
+                f"{r.model}" + (f" fold {r.fold}" if several else "") + f": {r.status}", index=index[(r.model, r.fold)]
+            )
             if progress is not None:
                 progress(r, len(results), len(tasks))
     return results
 
 
 # -- statistics -----------------------------------------------------------------
-def score_results(plan: ComparisonPlan, results: list, *, n_boot: int = 2000, random_state: int = 0,
-                  verbose: int = 1) -> ComparisonResult:
+def score_results(
+    plan: ComparisonPlan, results: list, *, n_boot: int = 2000, random_state: int = 0, verbose: int = 1
+) -> ComparisonResult:
     """Score the predictions of every model on the pooled test utterances of all folds.
 
     Returns
@@ -463,6 +533,7 @@ def score_results(plan: ComparisonPlan, results: list, *, n_boot: int = 2000, ra
         the best tested against the best (:func:`~dam.evaluation.statistics.tests_against`).
     """
     from dam.evaluation.metrics import evaluate
+
     folds = plan.folds
     pooled = Corpus([u for _, te in folds for u in te], name=plan.where, metadata=folds[0][1].metadata)
     fold_of = [k for k, (_, te) in enumerate(folds) for _ in te]
@@ -479,18 +550,26 @@ def score_results(plan: ComparisonPlan, results: list, *, n_boot: int = 2000, ra
         ev = evaluate(None, pooled, predictions=preds)
         preds_by_model[label] = preds
         # masked (missing) values are not scored
-        sse = np.array([np.sum((u.trajectory - p) ** 2 * (1 if u.mask is None else u.mask))
-                        for u, p in zip(pooled, preds)])
+        sse = np.array(
+            [np.sum((u.trajectory - p) ** 2 * (1 if u.mask is None else u.mask)) for u, p in zip(pooled, preds)]
+        )
         cnt = np.array([u.trajectory.size if u.mask is None else u.mask.sum() for u in pooled], dtype=float)
         lo, hi = bootstrap_rmse_ci(sse, cnt, n_boot=n_boot, random_state=random_state)
         predict_s = sum(r.predict_seconds for r in mine)
-        summary.append(ModelScore(
-            label, rmse=ev.rmse, rmse_ci_low=lo, rmse_ci_high=hi, pearson_r=ev.pearson_r,
-            sensor_error=ev.sensor_error if ev.sensors else None,
-            fit_seconds=float(np.mean([r.fit_seconds for r in mine])),
-            predict_us_per_phone=1e6 * predict_s / sum(r.n_phones for r in mine),
-            frames_per_second=sum(r.n_frames for r in mine) / max(predict_s, 1e-12),
-            n_utterances=len(pooled)))
+        summary.append(
+            ModelScore(
+                label,
+                rmse=ev.rmse,
+                rmse_ci_low=lo,
+                rmse_ci_high=hi,
+                pearson_r=ev.pearson_r,
+                sensor_error=ev.sensor_error if ev.sensors else None,
+                fit_seconds=float(np.mean([r.fit_seconds for r in mine])),
+                predict_us_per_phone=1e6 * predict_s / sum(r.n_phones for r in mine),
+                frames_per_second=sum(r.n_frames for r in mine) / max(predict_s, 1e-12),
+                n_utterances=len(pooled),
+            )
+        )
         utt_rmse[label] = np.array([row["rmse"] for row in ev.per_utterance])
         for c, e, rr in zip(ev.channels, ev.rmse_per_channel, ev.pearson_per_channel):
             per_channel.append({"model": label, "channel": c, "rmse": float(e), "pearson_r": float(rr)})
@@ -511,19 +590,44 @@ def score_results(plan: ComparisonPlan, results: list, *, n_boot: int = 2000, ra
     example = {}
     if preds_by_model:
         u = pooled[0]
-        example = {"utterance": u.name, "frame_rate": u.frame_rate, "channels": list(u.channels),
-                   "alignment": u.alignment, "units": pooled.metadata.get("units"),
-                   "truth": np.asarray(u.trajectory), "predictions": {m: p[0] for m, p in preds_by_model.items()}}
-    return ComparisonResult(summary=summary, per_channel=per_channel, per_utterance=per_utt, best=best,
-                            corpus=plan.where, example=example, per_sensor=per_sensor,
-                            length_unit=pooled.metadata.get("length_unit"))
+        example = {
+            "utterance": u.name,
+            "frame_rate": u.frame_rate,
+            "channels": list(u.channels),
+            "alignment": u.alignment,
+            "units": pooled.metadata.get("units"),
+            "truth": np.asarray(u.trajectory),
+            "predictions": {m: p[0] for m, p in preds_by_model.items()},
+        }
+    return ComparisonResult(
+        summary=summary,
+        per_channel=per_channel,
+        per_utterance=per_utt,
+        best=best,
+        corpus=plan.where,
+        example=example,
+        per_sensor=per_sensor,
+        length_unit=pooled.metadata.get("length_unit"),
+    )
 
 
 # -- all four -----------------------------------------------------------------------
-def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, out=None, *,
-            test_size: float = 0.25, random_state: int = 0, n_boot: int = 2000, unknown_phone: str | None = "fallback",
-            channels=None, verbose: int = 1,
-            progress: Callable[[TaskResult, int, int], None] | None = None) -> ComparisonResult:
+def compare(
+    models,
+    train,
+    test=None,
+    cv: int | None = None,
+    n_jobs: int = 1,
+    out=None,
+    *,
+    test_size: float = 0.25,
+    random_state: int = 0,
+    n_boot: int = 2000,
+    unknown_phone: str | None = "fallback",
+    channels=None,
+    verbose: int = 1,
+    progress: Callable[[TaskResult, int, int], None] | None = None,
+) -> ComparisonResult:
     """Fit and score several synthesizers on the same held-out data.
 
     Parameters
@@ -572,8 +676,17 @@ def compare(models, train, test=None, cv: int | None = None, n_jobs: int = 1, ou
     >>> [row["model"] for row in res.summary]
     ['target-interpolation', 'phone-mean']
     """
-    plan = plan_comparison(models, train, test, cv, out, test_size=test_size, random_state=random_state,
-                           unknown_phone=unknown_phone, channels=channels)
+    plan = plan_comparison(
+        models,
+        train,
+        test,
+        cv,
+        out,
+        test_size=test_size,
+        random_state=random_state,
+        unknown_phone=unknown_phone,
+        channels=channels,
+    )
     results = run_tasks(plan, n_jobs, progress=progress)
     result = score_results(plan, results, n_boot=n_boot, random_state=random_state, verbose=verbose)
     if out is not None:
@@ -588,8 +701,13 @@ DEMO_CHANNELS = {"vtl": ("JA", "LP", "LD", "TCX", "TCY", "TTY")}
 #: height, all the training data, and the classical models but the two slowest to fit: the 1993
 #: Cohen-Massaro model (its per-channel Levenberg-Marquardt fit alone takes longer than the rest
 #: together) and the linguistic decision tree; ``dam demo --full`` has them.
-QUICK_DEMO = {"vtl": {"channels": ("JA", "LD", "TTY"), "train_minutes": None,
-                      "models": tuple(m for m in DEMO_MODELS[:-1] if m != "cohen-massaro")}}
+QUICK_DEMO = {
+    "vtl": {
+        "channels": ("JA", "LD", "TTY"),
+        "train_minutes": None,
+        "models": tuple(m for m in DEMO_MODELS[:-1] if m != "cohen-massaro"),
+    }
+}
 
 
 def demo_plan(corpus: str = "vtl", *, full: bool = False, channels="demo") -> dict:
@@ -601,6 +719,7 @@ def demo_plan(corpus: str = "vtl", *, full: bool = False, channels="demo") -> di
     demo channels and all the training data (about 3 minutes).
     """
     import dam.datasets as datasets
+
     ds = datasets._get(corpus)
     quick = None if full else QUICK_DEMO.get(corpus)
     models = quick["models"] if quick else DEMO_MODELS
@@ -609,16 +728,22 @@ def demo_plan(corpus: str = "vtl", *, full: bool = False, channels="demo") -> di
     minutes = quick["train_minutes"] if quick else None
     left_out = [m if isinstance(m, str) else m[0] for m in DEMO_MODELS if m not in models]
     names = [m if isinstance(m, str) else m[0] for m in models]
-    part = (f"the {'first %g minutes of the ' % minutes if minutes else ''}training part" if "test" in ds.splits
-            else "three quarters of the utterances")
+    part = (
+        f"the {f'first {minutes:g} minutes of the ' if minutes else ''}training part"
+        if "test" in ds.splits
+        else "three quarters of the utterances"
+    )
     held = "its held-out test part (words never seen in training)" if "test" in ds.splits else "the other quarter"
-    cost = {("vtl", True): f"Under a minute on two cores (--full adds {' and '.join(left_out)} and six channels: "
-                           "several minutes).",
-            ("vtl", False): "Several minutes on two cores."}.get((corpus, quick is not None),
-                                                                 "The progress line shows the time left.")
-    text = (f"dam demo: fits {len(models)} models ({', '.join(names)}) on {part} of the bundled corpus "
-            f"'{corpus}' ({'channels ' + ', '.join(channels) if channels else 'all channels'}), scores them on "
-            f"{held} and prints the comparison table. {cost}")
+    cost = {
+        ("vtl", True): f"Under a minute on two cores (--full adds {' and '.join(left_out)} and six channels: "
+        "several minutes).",
+        ("vtl", False): "Several minutes on two cores.",
+    }.get((corpus, quick is not None), "The progress line shows the time left.")
+    text = (
+        f"dam demo: fits {len(models)} models ({', '.join(names)}) on {part} of the bundled corpus "
+        f"'{corpus}' ({'channels ' + ', '.join(channels) if channels else 'all channels'}), scores them on "
+        f"{held} and prints the comparison table. {cost}"
+    )
     return {"models": models, "channels": channels, "train_minutes": minutes, "description": text}
 
 
@@ -632,8 +757,16 @@ def _first_minutes(corpus: Corpus, minutes: float | None) -> Corpus:
     return corpus.subset(range(n))
 
 
-def run_demo(out_dir=None, *, corpus: str | None = None, models=None, n_jobs: int = 1,
-             channels="demo", full: bool = False, verbose: int = 1) -> ComparisonResult:
+def run_demo(
+    out_dir=None,
+    *,
+    corpus: str | None = None,
+    models=None,
+    n_jobs: int = 1,
+    channels="demo",
+    full: bool = False,
+    verbose: int = 1,
+) -> ComparisonResult:
     """The ``dam demo`` comparison on a bundled corpus (:func:`demo_plan`); prints the table.
 
     ``vtl`` by default: trained on its train part, scored
@@ -641,6 +774,7 @@ def run_demo(out_dir=None, *, corpus: str | None = None, models=None, n_jobs: in
     all 19). Models whose dependencies are missing are listed as skipped.
     """
     import dam.datasets as datasets
+
     name = corpus or "vtl"
     ds = datasets._get(name)
     plan = demo_plan(name, full=full, channels=channels)
@@ -652,8 +786,9 @@ def run_demo(out_dir=None, *, corpus: str | None = None, models=None, n_jobs: in
         print(file=sys.stderr)
     if "test" in ds.splits:
         train = _first_minutes(datasets.load(name, "train"), plan["train_minutes"])
-        res = compare(models, train, f"{name}:test", n_jobs=n_jobs, out=out_dir,
-                      channels=plan["channels"], verbose=verbose)
+        res = compare(
+            models, train, f"{name}:test", n_jobs=n_jobs, out=out_dir, channels=plan["channels"], verbose=verbose
+        )
     else:
         res = compare(models, name, n_jobs=n_jobs, out=out_dir, channels=plan["channels"], verbose=verbose)
     print(res.table())

@@ -10,6 +10,7 @@
 
 Each returns the matplotlib Figure; :meth:`ComparisonResult.plot` saves them.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -19,8 +20,9 @@ from dam import plotting
 __all__ = ["plot_predictions", "plot_rmse", "plot_loss_curves"]
 
 
-def plot_predictions(example: dict, summary, *, corpus: str = "", max_models: int = 4,
-                     max_channels: int = 6, metadata=None):
+def plot_predictions(
+    example: dict, summary, *, corpus: str = "", max_models: int = 4, max_channels: int = 6, metadata=None
+):
     """Predictions against the truth on one held-out utterance.
 
     Parameters
@@ -48,19 +50,22 @@ def plot_predictions(example: dict, summary, *, corpus: str = "", max_models: in
     n_ch = truth.shape[1]
     rows = np.arange(n_ch) if n_ch <= max_channels else np.sort(np.argsort(-truth.std(axis=0))[:max_channels])
     t = np.arange(len(truth)) / example["frame_rate"]
-    which = (f"best {len(shown)} of {len(ok)} models" if len(shown) < len(ok) else f"{len(ok)} models")
+    which = f"best {len(shown)} of {len(ok)} models" if len(shown) < len(ok) else f"{len(ok)} models"
     chans = "" if len(rows) == n_ch else f", the {len(rows)} of {n_ch} channels that move most"
-    title = (f"Held-out utterance {example['utterance']}{' of ' + corpus if corpus else ''}: "
-             f"{which} (colour) against the measured trajectory (black){chans}")
-    fig, axes, _ = plotting.time_grid(len(rows), max(len(shown), 1), example["alignment"], title=title,
-                                      panel_size=(3.6, 1.35))
+    title = (
+        f"Held-out utterance {example['utterance']}{' of ' + corpus if corpus else ''}: "
+        f"{which} (colour) against the measured trajectory (black){chans}"
+    )
+    fig, axes, _ = plotting.time_grid(
+        len(rows), max(len(shown), 1), example["alignment"], title=title, panel_size=(3.6, 1.35)
+    )
     handles = {}
     for j, r in enumerate(shown):
         pred = np.asarray(example["predictions"][r["model"]])
         for i, c in enumerate(rows):
             ax = axes[i, j]
-            h_truth, = ax.plot(t, truth[:, c], color=plotting.TRUTH, lw=1.8)
-            h, = ax.plot(t, pred[:, c], color=plotting.model_color(j), lw=1.3)
+            (h_truth,) = ax.plot(t, truth[:, c], color=plotting.TRUTH, lw=1.8)
+            (h,) = ax.plot(t, pred[:, c], color=plotting.model_color(j), lw=1.3)
             handles.setdefault("measured", h_truth)
             handles[r["model"]] = h
             if j == 0:
@@ -104,8 +109,10 @@ def plot_rmse(summary, per_channel, *, best: str | None, corpus: str = "", metad
     n_panels = 1 + len(channels)
     ncols = min(4, n_panels)
     nrows = -(-n_panels // ncols)
-    title = (f"Held-out RMSE per model on {corpus or 'the test data'} "
-             f"({len(channels)} channel{'s' if len(channels) != 1 else ''}: {', '.join(channels)}); lower is better")
+    title = (
+        f"Held-out RMSE per model on {corpus or 'the test data'} "
+        f"({len(channels)} channel{'s' if len(channels) != 1 else ''}: {', '.join(channels)}); lower is better"
+    )
     fig, axes = plotting.figure(nrows, ncols, title=title, panel_size=(3.3, 0.28 * len(ok) + 1.0))
     y = np.arange(len(ok))[::-1]
     names = [r["model"] for r in ok]
@@ -131,8 +138,13 @@ def plot_rmse(summary, per_channel, *, best: str | None, corpus: str = "", metad
     for ax in list(axes.flat)[n_panels:]:
         ax.set_visible(False)
     from matplotlib.patches import Patch
-    plotting.legend_outside(fig, [Patch(color=plotting.PALETTE[1]), Patch(color=plotting.PALETTE[0])],
-                            ["best (lowest overall RMSE)", "other models"], where="lower")
+
+    plotting.legend_outside(
+        fig,
+        [Patch(color=plotting.PALETTE[1]), Patch(color=plotting.PALETTE[0])],
+        ["best (lowest overall RMSE)", "other models"],
+        where="lower",
+    )
     return fig
 
 
@@ -151,17 +163,26 @@ def plot_loss_curves(models: dict, *, corpus: str = ""):
     matplotlib.figure.Figure
     """
     n = len(models)
-    fig, axes = plotting.figure(1, n, title=f"Loss per epoch of the neural predictors"
-                                            f"{' on ' + corpus if corpus else ''} (early stopping keeps the "
-                                            "marked epoch)", sharey=True)
+    fig, axes = plotting.figure(
+        1,
+        n,
+        title=f"Loss per epoch of the neural predictors"
+        f"{' on ' + corpus if corpus else ''} (early stopping keeps the "
+        "marked epoch)",
+        sharey=True,
+    )
     from matplotlib.ticker import MaxNLocator
+
     handles, labels = [], []
     for ax, (label, m) in zip(axes[0], models.items()):
         epochs = np.arange(1, len(m.loss_curve_) + 1)
         handles, labels = [ax.semilogy(epochs, m.loss_curve_, color=plotting.PALETTE[0])[0]], ["training (dropout on)"]
         if len(getattr(m, "validation_curve_", [])):
-            handles.append(ax.semilogy(np.arange(1, len(m.validation_curve_) + 1), m.validation_curve_,
-                                       color=plotting.PALETTE[1])[0])
+            handles.append(
+                ax.semilogy(np.arange(1, len(m.validation_curve_) + 1), m.validation_curve_, color=plotting.PALETTE[1])[
+                    0
+                ]
+            )
             labels.append("validation")
         handles.append(ax.axvline(m.best_epoch_, color="0.3", lw=0.8, ls=":"))
         labels.append("epoch kept")

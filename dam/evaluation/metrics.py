@@ -17,14 +17,22 @@ millimetres for the corpora of :mod:`dam.corpus.formats`).
 observed: RMSE and r use only observed values, a sensor distance only frames
 where all the sensor's channels are observed.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["rmse", "rmse_per_channel", "pearson_per_channel", "sensor_distances", "medina_error",
-           "Evaluation", "evaluate"]
+__all__ = [
+    "rmse",
+    "rmse_per_channel",
+    "pearson_per_channel",
+    "sensor_distances",
+    "medina_error",
+    "Evaluation",
+    "evaluate",
+]
 
 
 def _check(y_true, y_pred, where="", mask=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -90,10 +98,16 @@ def sensor_distances(y_true, y_pred, sensor_columns, mask=None) -> tuple[np.ndar
         True where all of the sensor's channels are observed.
     """
     a, b, m = _check(y_true, y_pred, mask=mask)
-    d = np.stack([np.sqrt(((a[:, c] - b[:, c]) ** 2).sum(axis=1)) for c in map(list, sensor_columns)], axis=1) \
-        if len(sensor_columns) else np.zeros((len(a), 0))
-    valid = np.stack([m[:, list(c)].all(axis=1) for c in sensor_columns], axis=1) \
-        if len(sensor_columns) else np.zeros((len(a), 0), bool)
+    d = (
+        np.stack([np.sqrt(((a[:, c] - b[:, c]) ** 2).sum(axis=1)) for c in map(list, sensor_columns)], axis=1)
+        if len(sensor_columns)
+        else np.zeros((len(a), 0))
+    )
+    valid = (
+        np.stack([m[:, list(c)].all(axis=1) for c in sensor_columns], axis=1)
+        if len(sensor_columns)
+        else np.zeros((len(a), 0), bool)
+    )
     return d, valid
 
 
@@ -162,8 +176,10 @@ class Evaluation:
             lines += ["", f"{'sensor':<{ws}}  {'distance' + unit:>14}  channels"]
             for (s, chans), e in zip(self.sensors.items(), self.sensor_error_per_sensor):
                 lines.append(f"{s:<{ws}}  {e:>14.4g}  {' '.join(chans)}")
-            lines.append(f"{'overall':<{ws}}  {self.sensor_error:>14.4g}  "
-                         "(Medina et al. 2022, Eq. 1: mean Euclidean distance per sensor and frame)")
+            lines.append(
+                f"{'overall':<{ws}}  {self.sensor_error:>14.4g}  "
+                "(Medina et al. 2022, Eq. 1: mean Euclidean distance per sensor and frame)"
+            )
         return "\n".join(lines)
 
 
@@ -187,11 +203,15 @@ def evaluate(model, corpus, predictions=None) -> Evaluation:
     """
     if predictions is None:
         if tuple(model.channels_) != tuple(corpus.channels):
-            raise ValueError(f"{corpus.source or '<corpus>'}: field 'channels': the corpus has "
-                             f"{list(corpus.channels)} but the model was trained on {list(model.channels_)}")
+            raise ValueError(
+                f"{corpus.source or '<corpus>'}: field 'channels': the corpus has "
+                f"{list(corpus.channels)} but the model was trained on {list(model.channels_)}"
+            )
         if abs(model.frame_rate_ - corpus.frame_rate) > 1e-9:
-            raise ValueError(f"{corpus.source or '<corpus>'}: field 'frame_rate': the corpus has "
-                             f"{corpus.frame_rate:g} but the model was trained at {model.frame_rate_:g}")
+            raise ValueError(
+                f"{corpus.source or '<corpus>'}: field 'frame_rate': the corpus has "
+                f"{corpus.frame_rate:g} but the model was trained at {model.frame_rate_:g}"
+            )
         # duck-typed (a Synthesizer's predict_inputs): metrics sits below the interface
         inputs = model.predict_inputs(corpus) if hasattr(model, "predict_inputs") else corpus.alignments
         predictions = model.predict(inputs)
@@ -202,8 +222,12 @@ def evaluate(model, corpus, predictions=None) -> Evaluation:
     for u, p in zip(corpus, predictions):
         a, b, m = _check(u.trajectory, p, f"{u.name}: ", mask=u.mask)
         r = pearson_per_channel(a, b, m)
-        row = {"utterance": u.name, "n_frames": len(a), "rmse": rmse(a, b, m),
-               "pearson_r": float(np.nanmean(r)) if np.isfinite(r).any() else float("nan")}
+        row = {
+            "utterance": u.name,
+            "n_frames": len(a),
+            "rmse": rmse(a, b, m),
+            "pearson_r": float(np.nanmean(r)) if np.isfinite(r).any() else float("nan"),
+        }
         if cols:
             d, valid = sensor_distances(a, b, cols, m)
             dists.append(d)
@@ -220,9 +244,18 @@ def evaluate(model, corpus, predictions=None) -> Evaluation:
         with np.errstate(invalid="ignore", divide="ignore"):
             per_sensor = np.where(V, D, 0.0).sum(axis=0) / V.sum(axis=0)
         utt = [row["sensor_error"] for row in per_utt if np.isfinite(row["sensor_error"])]
-        extra = {"sensors": dict(sensors), "sensor_error_per_sensor": per_sensor,
-                 "sensor_error": float(np.mean(utt)) if utt else float("nan")}
-    return Evaluation(rmse=rmse(Y, P, M), rmse_per_channel=rmse_per_channel(Y, P, M), pearson_per_channel=r,
-                      pearson_r=float(np.nanmean(r)) if np.isfinite(r).any() else float("nan"),
-                      per_utterance=per_utt, channels=list(corpus.channels),
-                      length_unit=corpus.metadata.get("length_unit"), **extra)
+        extra = {
+            "sensors": dict(sensors),
+            "sensor_error_per_sensor": per_sensor,
+            "sensor_error": float(np.mean(utt)) if utt else float("nan"),
+        }
+    return Evaluation(
+        rmse=rmse(Y, P, M),
+        rmse_per_channel=rmse_per_channel(Y, P, M),
+        pearson_per_channel=r,
+        pearson_r=float(np.nanmean(r)) if np.isfinite(r).any() else float("nan"),
+        per_utterance=per_utt,
+        channels=list(corpus.channels),
+        length_unit=corpus.metadata.get("length_unit"),
+        **extra,
+    )

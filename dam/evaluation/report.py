@@ -13,6 +13,7 @@
 Each takes a :class:`~dam.evaluation.compare.ComparisonResult` (anything with its
 attributes), so a new file or figure goes here without touching the comparison.
 """
+
 from __future__ import annotations
 
 import csv
@@ -107,35 +108,45 @@ def markdown_table(result) -> str:
     -------
     str
     """
-    head = ("| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | p vs best (Holm) |\n"
-            "|---|---:|---:|---:|---:|---:|---:|---:|")
+    head = (
+        "| model | RMSE | 95% CI | Pearson r | fit s | µs/phone | frames/s | p vs best (Holm) |\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|"
+    )
     lines = [head]
     for r in result.summary:
         if r["status"] != "ok":
             lines.append(f"| {r['model']} | {r['status']}: {r['reason']} | | | | | | |")
             continue
         p = "best" if r["model"] == result.best else _fmt_p(r["wilcoxon_p_holm"])
-        lines.append(f"| {r['model']} | {r['rmse']:.4g} | {r['rmse_ci_low']:.4g}–{r['rmse_ci_high']:.4g} | "
-                     f"{r['pearson_r']:.3f} | {r['fit_seconds']:.2f} | {r['predict_us_per_phone']:.1f} | "
-                     f"{r['frames_per_second']:.3g} | {p} |")
+        lines.append(
+            f"| {r['model']} | {r['rmse']:.4g} | {r['rmse_ci_low']:.4g}–{r['rmse_ci_high']:.4g} | "
+            f"{r['pearson_r']:.3f} | {r['fit_seconds']:.2f} | {r['predict_us_per_phone']:.1f} | "
+            f"{r['frames_per_second']:.3g} | {p} |"
+        )
     n_utt = max([r["n_utterances"] for r in result.summary if r["status"] == "ok"] or [0])
     lines.append("")
     if result.per_sensor:
         unit = f" ({result.length_unit})" if result.length_unit else ""
         errs = ", ".join(f"{r['model']} {r['sensor_error']:.4g}" for r in result.summary if r["status"] == "ok")
         lines.append("")
-        lines.append(f"Sensor error{unit}, mean Euclidean distance per sensor and frame (Medina et al. 2022, "
-                     f"Eq. 1), averaged over utterances: {errs}.")
-    lines.append(f"Held-out {result.corpus}: {n_utt} utterances. RMSE in channel units over all frames and "
-                 "channels; 95% CI by bootstrap over utterances; Pearson r per channel, averaged; "
-                 "p: two-sided paired Wilcoxon signed-rank test of per-utterance RMSE against the best "
-                 "model, Holm-corrected.")
+        lines.append(
+            f"Sensor error{unit}, mean Euclidean distance per sensor and frame (Medina et al. 2022, "
+            f"Eq. 1), averaged over utterances: {errs}."
+        )
+    lines.append(
+        f"Held-out {result.corpus}: {n_utt} utterances. RMSE in channel units over all frames and "
+        "channels; 95% CI by bootstrap over utterances; Pearson r per channel, averaged; "
+        "p: two-sided paired Wilcoxon signed-rank test of per-utterance RMSE against the best "
+        "model, Holm-corrected."
+    )
     # The exact two-sided signed-rank test cannot go below 2 / 2^n; Holm multiplies the smallest p.
     n_tests = sum(r["status"] == "ok" for r in result.summary) - 1
-    floor = min(1.0, n_tests * 2.0 / 2.0 ** n_utt) if n_utt else 1.0
+    floor = min(1.0, n_tests * 2.0 / 2.0**n_utt) if n_utt else 1.0
     if n_tests > 0 and floor > 0.05:
-        lines.append(f"With {n_utt} utterances and {n_tests} comparisons no Holm-corrected p can fall below "
-                     f"{floor:.2g}: use more test utterances or --cv for significance.")
+        lines.append(
+            f"With {n_utt} utterances and {n_tests} comparisons no Holm-corrected p can fall below "
+            f"{floor:.2g}: use more test utterances or --cv for significance."
+        )
     return "\n".join(lines)
 
 
@@ -148,9 +159,11 @@ def write_report(result, out) -> list[str]:
         The paths written.
     """
     os.makedirs(out, exist_ok=True)
-    paths = [_write_csv(os.path.join(out, "summary.csv"), result.summary, SUMMARY_COLUMNS),
-             _write_csv(os.path.join(out, "per_channel.csv"), result.per_channel, PER_CHANNEL_COLUMNS),
-             _write_csv(os.path.join(out, "per_utterance.csv"), result.per_utterance, PER_UTTERANCE_COLUMNS)]
+    paths = [
+        _write_csv(os.path.join(out, "summary.csv"), result.summary, SUMMARY_COLUMNS),
+        _write_csv(os.path.join(out, "per_channel.csv"), result.per_channel, PER_CHANNEL_COLUMNS),
+        _write_csv(os.path.join(out, "per_utterance.csv"), result.per_utterance, PER_UTTERANCE_COLUMNS),
+    ]
     if result.per_sensor:
         paths.append(_write_csv(os.path.join(out, "per_sensor.csv"), result.per_sensor, PER_SENSOR_COLUMNS))
     md = os.path.join(out, "summary.md")
@@ -165,6 +178,7 @@ def plot_report(result, out) -> list[str]:
     """``predictions.png`` and ``rmse.png`` in ``out`` (:mod:`dam.evaluation.figures`); returns their paths."""
     import dam.plotting as plotting
     from dam.evaluation.figures import plot_predictions, plot_rmse
+
     ok = [r for r in result.summary if r["status"] == "ok"]
     units = {"units": result.example.get("units")} if result.example.get("units") else {}
     paths = []

@@ -11,6 +11,7 @@
 A new statistic of a comparison goes here; :mod:`dam.evaluation.compare` calls it
 and :mod:`dam.evaluation.report` shows it.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -97,6 +98,7 @@ def paired_wilcoxon(a, b) -> float:
     0.03125
     """
     from scipy.stats import wilcoxon
+
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     if np.allclose(a, b, rtol=0, atol=0):
         return 1.0

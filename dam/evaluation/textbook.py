@@ -11,6 +11,7 @@
 
 Each returns the matplotlib Figure.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -44,8 +45,11 @@ def phone_sequence(phones, durations=0.1) -> Alignment:
     labels = phones.split() if isinstance(phones, str) else [str(p) for p in phones]
     if not labels:
         raise DataError(None, "phones", phones, "type at least one phone")
-    d = np.broadcast_to(np.asarray(durations, dtype=float), (len(labels),)) if np.ndim(durations) == 0 \
+    d = (
+        np.broadcast_to(np.asarray(durations, dtype=float), (len(labels),))
+        if np.ndim(durations) == 0
         else np.asarray(durations, dtype=float)
+    )
     if d.shape != (len(labels),) or not np.all(np.isfinite(d) & (d > 0)):
         raise DataError(None, "durations", durations, f"need {len(labels)} positive durations (or one for all)")
     ends = np.cumsum(d)
@@ -92,8 +96,12 @@ def plot_dominance_sum(model, alignment: Alignment, channel: int = 0, *, metadat
     how = "weighted average" if getattr(model, "normalize", True) else "sum"
     seq = name or " ".join(alignment.labels)
     fig, axes, _ = plotting.time_grid(
-        3, 1, alignment, panel_size=(8.0, 1.6),
-        title=f"Coarticulation in the DAM: dominance of each segment and their {how}, /{seq}/, channel {ch}")
+        3,
+        1,
+        alignment,
+        panel_size=(8.0, 1.6),
+        title=f"Coarticulation in the DAM: dominance of each segment and their {how}, /{seq}/, channel {ch}",
+    )
     ax1, ax2, ax3 = axes[:, 0]
     colors = [plotting.model_color(j) for j in range(len(rows))]
     for j in range(len(rows)):
@@ -102,7 +110,7 @@ def plot_dominance_sum(model, alignment: Alignment, channel: int = 0, *, metadat
         ax3.plot(np.where(reach, t, np.nan), np.where(reach, A[j], np.nan), color=colors[j], lw=0.9, alpha=0.8)
     ax1.plot(t, total, color="0.4", lw=1.0, ls=":")
     ax2.stackplot(t, share, colors=colors, alpha=0.85)
-    h_out, = ax3.plot(t, out, color=plotting.TRUTH, lw=2.0)
+    (h_out,) = ax3.plot(t, out, color=plotting.TRUTH, lw=2.0)
     ax1.set_ylabel("dominance D_j\n(no unit)")
     ax1.set_title("dominance of each segment, Eq. (1) (dotted: their sum)", fontsize=9)
     ax2.set_ylabel("share D_j / ΣD\n(no unit)")
@@ -111,14 +119,28 @@ def plot_dominance_sum(model, alignment: Alignment, channel: int = 0, *, metadat
     ax3.set_ylabel(plotting.channel_label(ch, metadata, wrap=True))
     ax3.set_title(f"animemes A_j where their dominance reaches, and their {how} (Eq. 2)", fontsize=9)
     from matplotlib.lines import Line2D
-    plotting.legend_outside(fig, [Line2D([], [], color=colors[0], lw=1), h_out],
-                            ["one colour per segment (D_j, share, A_j)", f"DAM output (Eq. 2, {how})"],
-                            where="lower")
+
+    plotting.legend_outside(
+        fig,
+        [Line2D([], [], color=colors[0], lw=1), h_out],
+        ["one colour per segment (D_j, share, A_j)", f"DAM output (Eq. 2, {how})"],
+        where="lower",
+    )
     return fig
 
 
-def plot_sequence(models: dict, alignment, channels=None, *, truth=None, metadata=None,
-                  name: str = "", title: str | None = None, panel_size=(3.4, 1.3), legend: str = "right"):
+def plot_sequence(
+    models: dict,
+    alignment,
+    channels=None,
+    *,
+    truth=None,
+    metadata=None,
+    name: str = "",
+    title: str | None = None,
+    panel_size=(3.4, 1.3),
+    legend: str = "right",
+):
     """One phone sequence under several fitted models: a column per model, a row per channel.
 
     Parameters
@@ -169,8 +191,8 @@ def plot_sequence(models: dict, alignment, channels=None, *, truth=None, metadat
             ax = axes[i, j]
             if truth is not None:
                 tr = np.asarray(truth)[:, c]
-                handles["recorded"], = ax.plot(np.arange(len(tr)) / fr, tr, color=plotting.TRUTH, lw=1.8)
-            handles[label], = ax.plot(t, y[:, c], color=plotting.model_color(j), lw=1.4)
+                (handles["recorded"],) = ax.plot(np.arange(len(tr)) / fr, tr, color=plotting.TRUTH, lw=1.8)
+            (handles[label],) = ax.plot(t, y[:, c], color=plotting.model_color(j), lw=1.4)
             if j == 0:
                 ax.set_ylabel(plotting.channel_label(names[c], metadata, wrap=True), fontsize=8)
         axes[0, j].set_title(label)

@@ -16,6 +16,7 @@ format is chosen by the extension:
 :mod:`dam.export.runtime` holds the numpy-only runtime that plays a model
 exported with :func:`dam.export.runtime.export_runtime`.
 """
+
 from __future__ import annotations
 
 import os
@@ -28,23 +29,33 @@ __all__ = ["export", "read_animation", "Animation", "ExportReport", "FORMATS", "
 
 def _write_gltf(*args, **kw):
     from .gltf import write_gltf  # pulls in the outline geometry only when needed
+
     return write_gltf(*args, **kw)
 
 
 def _write_textgrid(*args, **kw):
     from .textgrid import write_phones_textgrid
+
     return write_phones_textgrid(*args, **kw)
 
 
 def _write_articulators(*args, **kw):
     from .articulators import write_articulators  # VocalTractLab and matplotlib only when drawing
+
     return write_articulators(*args, **kw)
 
 
 #: lower-case extension -> writer(values, path, channels=, frame_rate=, alignment=, metadata=, **options)
-FORMATS = {".csv": write_csv, ".json": write_json, ".gltf": _write_gltf, ".glb": _write_gltf,
-           ".textgrid": _write_textgrid, ".gif": _write_articulators, ".mp4": _write_articulators,
-           ".html": _write_articulators}
+FORMATS = {
+    ".csv": write_csv,
+    ".json": write_json,
+    ".gltf": _write_gltf,
+    ".glb": _write_gltf,
+    ".textgrid": _write_textgrid,
+    ".gif": _write_articulators,
+    ".mp4": _write_articulators,
+    ".html": _write_articulators,
+}
 
 
 def export(trajectories, path, *, channels, frame_rate, alignment=None, metadata=None, **options) -> ExportReport:
@@ -93,14 +104,21 @@ def export(trajectories, path, *, channels, frame_rate, alignment=None, metadata
     (3, 2)
     """
     from dam.corpus import DataError
+
     path = os.fspath(path)
     suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
-        raise DataError(path, "extension", Path(path).suffix or "(none)", "not an animation format",
-                        "use .csv, .json, .gltf, .glb, .TextGrid, or .gif, .mp4, .html (moving vocal tract)")
+        raise DataError(
+            path,
+            "extension",
+            Path(path).suffix or "(none)",
+            "not an animation format",
+            "use .csv, .json, .gltf, .glb, .TextGrid, or .gif, .mp4, .html (moving vocal tract)",
+        )
     values, channels, frame_rate = check_animation(trajectories, channels, frame_rate, path, alignment)
-    return FORMATS[suffix](values, path, channels=channels, frame_rate=frame_rate, alignment=alignment,
-                           metadata=metadata, **options)
+    return FORMATS[suffix](
+        values, path, channels=channels, frame_rate=frame_rate, alignment=alignment, metadata=metadata, **options
+    )
 
 
 class _CallableModule(type(os)):

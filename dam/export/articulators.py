@@ -28,6 +28,7 @@ Files:
 
 Needs VocalTractLab (``pip install "dam[vtl]"``).
 """
+
 from __future__ import annotations
 
 import base64
@@ -44,16 +45,25 @@ from dam import plotting
 from dam.corpus import Alignment, DataError
 from dam.corpus.atomic import atomic_path, atomic_write
 
-__all__ = ["ARTICULATOR_FORMATS", "frame_count", "controls_at", "articulator_outlines", "ArticulatorRenderer",
-           "write_articulators", "find_ffmpeg"]
+__all__ = [
+    "ARTICULATOR_FORMATS",
+    "frame_count",
+    "controls_at",
+    "articulator_outlines",
+    "ArticulatorRenderer",
+    "write_articulators",
+    "find_ffmpeg",
+]
 
 #: Extensions :func:`write_articulators` writes (registered in :data:`dam.export.FORMATS`).
 ARTICULATOR_FORMATS = (".gif", ".mp4", ".html")
 #: Contour colours: the fixed walls grey, the moving parts in the palette.
-_CONTOUR_STYLE = {"upper": ("0.35", "upper lip, palate,\nvelum, pharynx"),
-                  "lower": (plotting.PALETTE[0], "lower lip, jaw"),
-                  "tongue": (plotting.PALETTE[1], "tongue"),
-                  "epiglottis": (plotting.PALETTE[2], "epiglottis")}
+_CONTOUR_STYLE = {
+    "upper": ("0.35", "upper lip, palate,\nvelum, pharynx"),
+    "lower": (plotting.PALETTE[0], "lower lip, jaw"),
+    "tongue": (plotting.PALETTE[1], "tongue"),
+    "epiglottis": (plotting.PALETTE[2], "epiglottis"),
+}
 
 
 def frame_count(duration: float, fps: float) -> int:
@@ -94,18 +104,31 @@ def controls_at(values, frame_rate: float, times) -> np.ndarray:
 
 def _vtl_order(channels, source) -> list[int]:
     from dam.datasets.vtl import VTL_CHANNELS
+
     missing = [c for c in VTL_CHANNELS if c not in channels]
     if missing:
-        raise DataError(source, "channels", list(channels),
-                        f"the articulator drawing needs VocalTractLab's 19 tract parameters "
-                        f"({' '.join(VTL_CHANNELS)}); missing {', '.join(missing)}",
-                        "animate with a model trained on them (the default model of `dam animate`), "
-                        "or write .csv/.json/.gltf instead")
+        raise DataError(
+            source,
+            "channels",
+            list(channels),
+            f"the articulator drawing needs VocalTractLab's 19 tract parameters "
+            f"({' '.join(VTL_CHANNELS)}); missing {', '.join(missing)}",
+            "animate with a model trained on them (the default model of `dam animate`), "
+            "or write .csv/.json/.gltf instead",
+        )
     return [list(channels).index(c) for c in VTL_CHANNELS]
 
 
-def articulator_outlines(values, channels, frame_rate: float, *, fps: float = 25.0, n_points: int = 40,
-                         n_frames: int | None = None, source=None):
+def articulator_outlines(
+    values,
+    channels,
+    frame_rate: float,
+    *,
+    fps: float = 25.0,
+    n_points: int = 40,
+    n_frames: int | None = None,
+    source=None,
+):
     """The vocal-tract outline at every output frame.
 
     Parameters
@@ -133,6 +156,7 @@ def articulator_outlines(values, channels, frame_rate: float, *, fps: float = 25
         :func:`dam.crossmap.outlines.tract_outlines` returns them.
     """
     from dam.crossmap.outlines import tract_outlines
+
     values = np.asarray(values, dtype=float)
     order = _vtl_order(channels, source)
     if not (np.isfinite(fps) and fps > 0):
@@ -169,10 +193,20 @@ class ArticulatorRenderer:
     size : (int, int)
     """
 
-    def __init__(self, views, times, *, alignment: Alignment | None = None,
-                 title: str = "Midsagittal vocal tract (VocalTractLab)", size=(640, 400), n_points: int = 40,
-                 window: float = 1.2, dpi: int = 100):
+    def __init__(
+        self,
+        views,
+        times,
+        *,
+        alignment: Alignment | None = None,
+        title: str = "Midsagittal vocal tract (VocalTractLab)",
+        size=(640, 400),
+        n_points: int = 40,
+        window: float = 1.2,
+        dpi: int = 100,
+    ):
         from dam.crossmap.outlines import CONTOURS
+
         plt = plotting.pyplot()
         self.views = [(str(t), np.asarray(o, dtype=float)) for t, o in views]
         self.times = np.asarray(times, dtype=float)
@@ -181,8 +215,9 @@ class ArticulatorRenderer:
         self.size = (w, h)
         self.figure = fig = plt.figure(figsize=(w / dpi, h / dpi), dpi=dpi, layout="constrained")
         nv = len(self.views)
-        gs = fig.add_gridspec(2 if alignment is not None else 1, nv,
-                              height_ratios=[1.0, 0.16] if alignment is not None else [1.0])
+        gs = fig.add_gridspec(
+            2 if alignment is not None else 1, nv, height_ratios=[1.0, 0.16] if alignment is not None else [1.0]
+        )
         allpts = np.concatenate([o.reshape(-1, 2) for _, o in self.views])
         lo, hi = allpts.min(axis=0), allpts.max(axis=0)
         pad = 0.05 * (hi - lo).max()
@@ -195,8 +230,12 @@ class ArticulatorRenderer:
             ax.set_title(name, fontsize=9)
             ax.set_xlabel("x (cm)")
             ax.set_ylabel("y (cm)" if v == 0 else "")
-            self.lines.append({c: ax.plot([], [], color=_CONTOUR_STYLE[c][0], lw=1.8, label=_CONTOUR_STYLE[c][1])[0]
-                               for c in CONTOURS})
+            self.lines.append(
+                {
+                    c: ax.plot([], [], color=_CONTOUR_STYLE[c][0], lw=1.8, label=_CONTOUR_STYLE[c][1])[0]
+                    for c in CONTOURS
+                }
+            )
         self.clock = fig.text(0.005, 0.995, "", ha="left", va="top", fontsize=8)
         self.tier = self.cursor = None
         if alignment is not None:
@@ -205,11 +244,11 @@ class ArticulatorRenderer:
             self.cursor = self.tier.axvline(0.0, color=plotting.TRUTH, lw=1.5)
             self._labels = [(t, t.get_position()[0]) for t in self.tier.texts]
             from matplotlib.ticker import MultipleLocator
+
             self.tier.xaxis.set_major_locator(MultipleLocator(0.5))
         fig.suptitle(title, fontsize=10)
         first = self.lines[0]
-        plotting.legend_outside(fig, list(first.values()), [ln.get_label() for ln in first.values()],
-                                title="contour")
+        plotting.legend_outside(fig, list(first.values()), [ln.get_label() for ln in first.values()], title="contour")
         self.draw(0)
         fig.canvas.draw()  # constrained layout once; then frozen (one layout per frame is slow)
         fig.set_layout_engine("none")
@@ -228,6 +267,7 @@ class ArticulatorRenderer:
     def draw(self, k: int):
         """Put frame ``k`` on the figure; returns the figure."""
         from dam.crossmap.outlines import CONTOURS
+
         for lines, (_, outlines) in zip(self.lines, self.views):
             pts = outlines[k].reshape(len(CONTOURS), self.n_points, 2)
             for c, p in zip(CONTOURS, pts):
@@ -262,6 +302,7 @@ def find_ffmpeg() -> str | None:
         return exe
     try:
         import imageio_ffmpeg
+
         return imageio_ffmpeg.get_ffmpeg_exe()
     except (ImportError, RuntimeError):
         return None
@@ -270,6 +311,7 @@ def find_ffmpeg() -> str | None:
 def _paletted(frames):
     """Frames as 64-colour images with one palette (from the first frame): the same colours move."""
     from PIL import Image
+
     pal = Image.fromarray(frames[0]).quantize(colors=64, method=Image.Quantize.MEDIANCUT)
     return [Image.fromarray(f).quantize(palette=pal, dither=Image.Dither.NONE) for f in frames]
 
@@ -277,16 +319,47 @@ def _paletted(frames):
 def _write_gif(frames, path, fps):
     images = _paletted(frames)
     with atomic_path(path) as tmp:
-        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:], loop=0,
-                       duration=1000.0 / fps, disposal=1, optimize=False)
+        images[0].save(
+            tmp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            loop=0,
+            duration=1000.0 / fps,
+            disposal=1,
+            optimize=False,
+        )
 
 
 def _write_mp4(frames, path, fps, exe):
     h, w = frames[0].shape[:2]
     with atomic_path(path) as tmp:
-        cmd = [exe, "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w}x{h}",
-               "-r", repr(float(fps)), "-i", "-", "-an", "-c:v", "libx264", "-pix_fmt", "yuv420p",
-               "-movflags", "+faststart", "-f", "mp4", tmp]
+        cmd = [
+            exe,
+            "-y",
+            "-loglevel",
+            "error",
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            "rgb24",
+            "-s",
+            f"{w}x{h}",
+            "-r",
+            repr(float(fps)),
+            "-i",
+            "-",
+            "-an",
+            "-c:v",
+            "libx264",
+            "-pix_fmt",
+            "yuv420p",
+            "-movflags",
+            "+faststart",
+            "-f",
+            "mp4",
+            tmp,
+        ]
         proc = subprocess.run(cmd, input=b"".join(f.tobytes() for f in frames), capture_output=True)
         if proc.returncode:
             raise DataError(path, "mp4", exe, f"ffmpeg failed: {proc.stderr.decode(errors='replace')[-400:]}")
@@ -330,14 +403,34 @@ def _write_html(frames, path, fps, title):
         f.save(buf, format="PNG", optimize=True)
         encoded.append(base64.b64encode(buf.getvalue()).decode("ascii"))
     h, w = frames[0].shape[:2]
-    page = _PLAYER.format(title=_html.escape(title), w=w, h=h, last=len(frames) - 1, slider=max(w - 200, 100),
-                          n=len(frames), fps=float(fps), frames=json.dumps(encoded))
+    page = _PLAYER.format(
+        title=_html.escape(title),
+        w=w,
+        h=h,
+        last=len(frames) - 1,
+        slider=max(w - 200, 100),
+        n=len(frames),
+        fps=float(fps),
+        frames=json.dumps(encoded),
+    )
     with atomic_write(path, "w") as fh:
         fh.write(page)
 
 
-def write_articulators(values, path, *, channels, frame_rate, alignment=None, metadata=None, fps: float = 25.0,
-                       size=(640, 400), compare=None, label: str | None = None, n_points: int = 40):
+def write_articulators(
+    values,
+    path,
+    *,
+    channels,
+    frame_rate,
+    alignment=None,
+    metadata=None,
+    fps: float = 25.0,
+    size=(640, 400),
+    compare=None,
+    label: str | None = None,
+    n_points: int = 40,
+):
     """Write the moving vocal-tract outline of controls to ``.gif``, ``.mp4`` or ``.html``.
 
     The writer of :func:`dam.export.export` for those extensions.
@@ -379,6 +472,7 @@ def write_articulators(values, path, *, channels, frame_rate, alignment=None, me
         a bad ``fps`` or ``size``, or ``.mp4`` without ffmpeg.
     """
     from .tables import ExportReport, check_animation
+
     ext = os.path.splitext(path)[1].lower()
     try:
         size = tuple(int(v) for v in size)
@@ -396,23 +490,40 @@ def write_articulators(values, path, *, channels, frame_rate, alignment=None, me
     if ext == ".mp4":
         exe = find_ffmpeg()
         if exe is None:
-            raise DataError(path, "extension", ".mp4", "writing .mp4 needs ffmpeg, which was not found",
-                            'install ffmpeg or pip install "dam[video]", or write .gif or .html')
+            raise DataError(
+                path,
+                "extension",
+                ".mp4",
+                "writing .mp4 needs ffmpeg, which was not found",
+                'install ffmpeg or pip install "dam[video]", or write .gif or .html',
+            )
     model = (metadata or {}).get("model")
     first = label or (model if isinstance(model, str) else "controls")
     n = frame_count(len(values) / frame_rate, fps)
-    times, main = articulator_outlines(values, channels, frame_rate, fps=fps, n_points=n_points, n_frames=n,
-                                       source=path)
+    times, main = articulator_outlines(
+        values, channels, frame_rate, fps=fps, n_points=n_points, n_frames=n, source=path
+    )
     views = [(first, main)]
     for k, (name, other) in enumerate(compare or []):
         other, _, _ = check_animation(other, channels, frame_rate, f"{path} (view {name!r})")
         if abs(len(other) - len(values)) > 1:
-            raise DataError(path, f"compare[{k}] ({name})", len(other),
-                            f"has a different number of frames than the animation ({len(values)})")
-        views.append((str(name), articulator_outlines(other, channels, frame_rate, fps=fps, n_points=n_points,
-                                                      n_frames=n, source=path)[1]))
-    title = "Midsagittal vocal tract (VocalTractLab)" + (": " + " | ".join(v[0] for v in views)
-                                                         if len(views) > 1 else f", {first}")
+            raise DataError(
+                path,
+                f"compare[{k}] ({name})",
+                len(other),
+                f"has a different number of frames than the animation ({len(values)})",
+            )
+        views.append(
+            (
+                str(name),
+                articulator_outlines(other, channels, frame_rate, fps=fps, n_points=n_points, n_frames=n, source=path)[
+                    1
+                ],
+            )
+        )
+    title = "Midsagittal vocal tract (VocalTractLab)" + (
+        ": " + " | ".join(v[0] for v in views) if len(views) > 1 else f", {first}"
+    )
     r = ArticulatorRenderer(views, times, alignment=alignment, title=title, size=size, n_points=n_points)
     try:
         frames = [r.image(k) for k in range(n)]
@@ -424,10 +535,14 @@ def write_articulators(values, path, *, channels, frame_rate, alignment=None, me
         _write_mp4(frames, path, fps, exe)
     else:
         _write_html(frames, path, fps, title)
-    notes = [f"{n} pictures of {r.size[0]}x{r.size[1]} at {fps:g} frames/s"
-             + (f", {len(views)} views side by side" if len(views) > 1 else "")]
+    notes = [
+        f"{n} pictures of {r.size[0]}x{r.size[1]} at {fps:g} frames/s"
+        + (f", {len(views)} views side by side" if len(views) > 1 else "")
+    ]
     if ext == ".gif" and abs(round(100 / fps) - 100 / fps) > 1e-9:
-        notes.append(f"GIF delays are whole centiseconds: {fps:g} frames/s plays at "
-                     f"{100 / round(100 / fps):.3g} frames/s")
-    return ExportReport(path=path, format=ext.lstrip("."), n_frames=n, n_channels=len(channels),
-                        frame_rate=fps, notes=notes)
+        notes.append(
+            f"GIF delays are whole centiseconds: {fps:g} frames/s plays at {100 / round(100 / fps):.3g} frames/s"
+        )
+    return ExportReport(
+        path=path, format=ext.lstrip("."), n_frames=n, n_channels=len(channels), frame_rate=fps, notes=notes
+    )

@@ -19,6 +19,7 @@ animation views none; GLB chunks are padded to 4 bytes (JSON with spaces,
 BIN with zeros). The test suite checks every variant with the Khronos
 glTF-Validator and imports the ``.glb`` into Blender.
 """
+
 from __future__ import annotations
 
 import base64
@@ -65,8 +66,12 @@ class _Builder:
         arr = np.ascontiguousarray(array)
         ctype = {np.dtype(np.float32): FLOAT, np.dtype(np.uint16): UINT16, np.dtype(np.uint32): UINT32}[arr.dtype]
         width = {"SCALAR": 1, "VEC3": 3}[type_]
-        acc = {"bufferView": self.view(arr.tobytes(), target), "componentType": ctype,
-               "count": int(arr.size // width), "type": type_}
+        acc = {
+            "bufferView": self.view(arr.tobytes(), target),
+            "componentType": ctype,
+            "count": int(arr.size // width),
+            "type": type_,
+        }
         if bounds:
             flat = arr.reshape(-1, width)
             cast = float if ctype == FLOAT else int
@@ -140,12 +145,12 @@ def read_gltf(path) -> tuple[dict, bytes]:
             jlen, jtype = struct.unpack_from("<II", raw, 12)
             if jtype != JSON_CHUNK:
                 raise DataError(path, "GLB chunk 0", hex(jtype), "the first chunk must be JSON")
-            doc = json.loads(raw[20:20 + jlen].decode("utf-8"))
+            doc = json.loads(raw[20 : 20 + jlen].decode("utf-8"))
             offset = 20 + jlen
             if offset + 8 <= len(raw):
                 blen, btype = struct.unpack_from("<II", raw, offset)
                 if btype == BIN_CHUNK:
-                    chunk = raw[offset + 8:offset + 8 + blen]
+                    chunk = raw[offset + 8 : offset + 8 + blen]
         else:
             doc = json.loads(raw.decode("utf-8"))
     except (ValueError, UnicodeDecodeError, struct.error) as exc:
@@ -169,7 +174,7 @@ def read_gltf(path) -> tuple[dict, bytes]:
                     blob = fh.read()
             except OSError as exc:
                 raise DataError(path, f"buffers[{i}].uri", uri, f"cannot be read: {exc.strerror}") from None
-        blobs.append(blob[:buf.get("byteLength", len(blob))])
+        blobs.append(blob[: buf.get("byteLength", len(blob))])
     merged, starts = bytearray(), []
     for blob in blobs:
         merged.extend(b"\0" * (-len(merged) % 16))
@@ -183,8 +188,13 @@ def read_gltf(path) -> tuple[dict, bytes]:
         uri = image.get("uri")
         if uri is None or uri.startswith("data:"):
             continue
-        mime = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".webp": "image/webp",
-                ".ktx2": "image/ktx2"}.get(os.path.splitext(uri)[1].lower())
+        mime = {
+            ".png": "image/png",
+            ".jpg": "image/jpeg",
+            ".jpeg": "image/jpeg",
+            ".webp": "image/webp",
+            ".ktx2": "image/ktx2",
+        }.get(os.path.splitext(uri)[1].lower())
         try:
             with open(os.path.join(os.path.dirname(path), uri), "rb") as fh:
                 blob = fh.read()
@@ -228,8 +238,12 @@ def read_mapping(mapping, source=None) -> dict[str, str]:
         where = os.fspath(mapping)
         doc = read_json_object(where, "mapping")
     if not isinstance(doc, dict) or not all(isinstance(k, str) and isinstance(v, str) for k, v in doc.items()):
-        raise DataError(where, "mapping", type(doc).__name__,
-                        'must be a JSON object of control name -> morph target name, e.g. {"JA": "jawOpen"}')
+        raise DataError(
+            where,
+            "mapping",
+            type(doc).__name__,
+            'must be a JSON object of control name -> morph target name, e.g. {"JA": "jawOpen"}',
+        )
     return dict(doc)
 
 
@@ -237,8 +251,9 @@ def read_mapping(mapping, source=None) -> dict[str, str]:
 def _frame_times(n_frames: int, frame_rate: float, source) -> np.ndarray:
     t = (np.arange(n_frames) / frame_rate).astype(np.float32)
     if n_frames > 1 and not np.all(np.diff(t) > 0):
-        raise DataError(source, "frame_rate", frame_rate,
-                        f"{n_frames} frames are too many for float32 keyframe times at this rate")
+        raise DataError(
+            source, "frame_rate", frame_rate, f"{n_frames} frames are too many for float32 keyframe times at this rate"
+        )
     return t
 
 
@@ -247,16 +262,36 @@ def _own_mesh_doc(b: _Builder, mesh, name: str) -> int:
     attrs = {"POSITION": b.accessor(pos, "VEC3", target=ARRAY_BUFFER, bounds=True)}
     idx_type = np.uint16 if len(pos) < 65535 else np.uint32
     indices = b.accessor(mesh.indices.astype(idx_type), "SCALAR", target=ELEMENT_ARRAY_BUFFER, bounds=True)
-    targets = [{"POSITION": b.accessor(t.astype(np.float32), "VEC3", target=ARRAY_BUFFER, bounds=True)}
-               for t in mesh.targets]
-    b.doc.setdefault("materials", []).append({
-        "name": "dam_ribbon", "doubleSided": True,
-        "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.25, 0.3, 1.0], "metallicFactor": 0.0,
-                                 "roughnessFactor": 0.7}})
-    b.doc.setdefault("meshes", []).append({
-        "name": name, "primitives": [{"attributes": attrs, "indices": indices, "mode": 4, "targets": targets,
-                                      "material": len(b.doc["materials"]) - 1}],
-        "weights": [float(w) for w in mesh.default_weights], "extras": {"targetNames": list(mesh.names)}})
+    targets = [
+        {"POSITION": b.accessor(t.astype(np.float32), "VEC3", target=ARRAY_BUFFER, bounds=True)} for t in mesh.targets
+    ]
+    b.doc.setdefault("materials", []).append(
+        {
+            "name": "dam_ribbon",
+            "doubleSided": True,
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.8, 0.25, 0.3, 1.0],
+                "metallicFactor": 0.0,
+                "roughnessFactor": 0.7,
+            },
+        }
+    )
+    b.doc.setdefault("meshes", []).append(
+        {
+            "name": name,
+            "primitives": [
+                {
+                    "attributes": attrs,
+                    "indices": indices,
+                    "mode": 4,
+                    "targets": targets,
+                    "material": len(b.doc["materials"]) - 1,
+                }
+            ],
+            "weights": [float(w) for w in mesh.default_weights],
+            "extras": {"targetNames": list(mesh.names)},
+        }
+    )
     b.doc.setdefault("nodes", []).append({"name": name, "mesh": len(b.doc["meshes"]) - 1})
     node = len(b.doc["nodes"]) - 1
     b.doc.setdefault("scenes", []).append({"name": "dam", "nodes": [node]})
@@ -272,15 +307,21 @@ def _rig_targets(doc, channels, mapping, rig_path):
         raise DataError(rig_path, "meshes", 0, "the rig has no mesh with morph targets")
     bad = {c: t for c, t in mapping.items() if c not in channels}
     if bad:
-        raise DataError(rig_path, "mapping", sorted(bad), "names controls the model does not have",
-                        f"controls: {list(channels)}")
+        raise DataError(
+            rig_path, "mapping", sorted(bad), "names controls the model does not have", f"controls: {list(channels)}"
+        )
     wanted = [mapping.get(c, c) for c in channels]
     unknown = [(c, t) for c, t in zip(channels, wanted) if t not in all_names]
     if unknown:
         shown = ", ".join(c if c == t else f"{c} -> {t}" for c, t in unknown)
-        raise DataError(rig_path, "morph targets", shown, "no morph target of that name in the rig",
-                        f"controls: {list(channels)}; rig morph targets: {all_names}; "
-                        "map names that differ with a mapping file (JSON: {\"control\": \"target\"})")
+        raise DataError(
+            rig_path,
+            "morph targets",
+            shown,
+            "no morph target of that name in the rig",
+            f"controls: {list(channels)}; rig morph targets: {all_names}; "
+            'map names that differ with a mapping file (JSON: {"control": "target"})',
+        )
     dup = [t for t in set(wanted) if wanted.count(t) > 1]
     if dup:
         raise DataError(rig_path, "mapping", sorted(dup), "several controls drive the same morph target")
@@ -293,8 +334,20 @@ def _rig_targets(doc, channels, mapping, rig_path):
     return out
 
 
-def write_gltf(values, path, *, channels, frame_rate, alignment=None, metadata=None, rig=None, mapping=None,
-               weights: str = "clip", mesh: str = "auto", **options) -> ExportReport:
+def write_gltf(
+    values,
+    path,
+    *,
+    channels,
+    frame_rate,
+    alignment=None,
+    metadata=None,
+    rig=None,
+    mapping=None,
+    weights: str = "clip",
+    mesh: str = "auto",
+    **options,
+) -> ExportReport:
     """Write a glTF 2.0 asset (``.gltf``, one JSON file, or ``.glb``, binary) animating morph weights.
 
     Parameters
@@ -328,6 +381,7 @@ def write_gltf(values, path, *, channels, frame_rate, alignment=None, metadata=N
     ExportReport
     """
     from .meshes import own_mesh
+
     if options:
         name = sorted(options)[0]
         raise DataError(path, name, options[name], "not an option of the glTF format")
@@ -355,8 +409,7 @@ def write_gltf(values, path, *, channels, frame_rate, alignment=None, metadata=N
     t_acc = b.accessor(times, "SCALAR", bounds=True)
     samplers, anim_channels = [], []
     for node, names, cols, mesh_index in drives:
-        defaults = (doc["meshes"][mesh_index].get("weights") if mesh_index is not None else None) \
-            or [0.0] * len(names)
+        defaults = (doc["meshes"][mesh_index].get("weights") if mesh_index is not None else None) or [0.0] * len(names)
         out = np.empty((len(W), len(names)), dtype=np.float32)
         for k, j in enumerate(cols):
             out[:, k] = W[:, j] if j >= 0 else defaults[k]  # targets no control drives keep their rest weight
@@ -364,10 +417,12 @@ def write_gltf(values, path, *, channels, frame_rate, alignment=None, metadata=N
         anim_channels.append({"sampler": len(samplers) - 1, "target": {"node": node, "path": "weights"}})
     extras = {"frame_rate": frame_rate, "channels": list(channels)}
     if alignment is not None:
-        extras["phones"] = [[lab, float(s), float(e)] for lab, s, e in
-                            zip(alignment.labels, alignment.starts, alignment.ends)]
-    doc.setdefault("animations", []).append({"name": "dam", "samplers": samplers, "channels": anim_channels,
-                                            "extras": extras})
+        extras["phones"] = [
+            [lab, float(s), float(e)] for lab, s, e in zip(alignment.labels, alignment.starts, alignment.ends)
+        ]
+    doc.setdefault("animations", []).append(
+        {"name": "dam", "samplers": samplers, "channels": anim_channels, "extras": extras}
+    )
     asset_extras = dict(doc["asset"].get("extras") or {})
     asset_extras["dam"] = {"toolkit": version, **({"metadata": metadata} if metadata else {})}
     doc["asset"]["extras"] = asset_extras
@@ -376,8 +431,12 @@ def write_gltf(values, path, *, channels, frame_rate, alignment=None, metadata=N
     if binary:
         doc["buffers"] = [{"byteLength": len(payload)}]
     else:
-        doc["buffers"] = [{"byteLength": len(payload),
-                           "uri": "data:application/octet-stream;base64," + base64.b64encode(payload).decode()}]
+        doc["buffers"] = [
+            {
+                "byteLength": len(payload),
+                "uri": "data:application/octet-stream;base64," + base64.b64encode(payload).decode(),
+            }
+        ]
     try:
         text = json.dumps(doc, separators=(",", ":"), allow_nan=False)
     except (TypeError, ValueError) as exc:
@@ -392,8 +451,9 @@ def write_gltf(values, path, *, channels, frame_rate, alignment=None, metadata=N
             fh.write(struct.pack("<II", len(payload), BIN_CHUNK) + payload)
         else:
             fh.write(text.encode("utf-8"))
-    rep = ExportReport(path, "glb" if binary else "gltf", values.shape[0], values.shape[1], frame_rate,
-                       clipped=clipped, scaled=scaled)
+    rep = ExportReport(
+        path, "glb" if binary else "gltf", values.shape[0], values.shape[1], frame_rate, clipped=clipped, scaled=scaled
+    )
     if rig is None:
         rep.notes.append(f"mesh: dam's own {own.kind} mesh with {len(channels)} morph targets")
     return rep

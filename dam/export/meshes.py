@@ -25,6 +25,7 @@ Regenerate it with ``python -m dam.export.meshes`` (about 30 s).
 The **bars** mesh serves any other channels: one unit-wide bar per control
 whose top rises by one unit at weight 1, a level meter a viewer can show.
 """
+
 from __future__ import annotations
 
 import os
@@ -40,8 +41,7 @@ RIBBON_POINTS = 40
 RIBBON_WIDTH_CM = 0.25
 CM = 0.01
 
-__all__ = ["MorphMesh", "vtl_ribbon_data", "vtl_ribbon", "toy_ribbon", "bars_mesh", "ribbon_strips",
-           "RIBBON_PATH"]
+__all__ = ["MorphMesh", "vtl_ribbon_data", "vtl_ribbon", "toy_ribbon", "bars_mesh", "ribbon_strips", "RIBBON_PATH"]
 
 
 @dataclass
@@ -131,6 +131,7 @@ def vtl_ribbon_data(n_points: int = RIBBON_POINTS, *, every: int = 6, n_utteranc
     import dam.datasets
     from dam.crossmap.outlines import TOY_CONTROLS, tract_outlines, vtl_shape
     from dam.datasets.vtl import VTL_CHANNELS, import_vtl
+
     vtl = import_vtl()
     info = {p["name"]: p for p in vtl.get_param_info("tract")}
     lo = np.array([float(info[n]["min"]) for n in VTL_CHANNELS])
@@ -146,9 +147,18 @@ def vtl_ribbon_data(n_points: int = RIBBON_POINTS, *, every: int = 6, n_utteranc
     x0 = vtl_shape("@")
     shapes = {n: outline(vtl_shape(n)) for n in sorted({s for pair in TOY_CONTROLS.values() for s in pair})}
     toy = np.stack([shapes[a] - shapes[b] for a, b in TOY_CONTROLS.values()])
-    return {"intercept": coef[0], "jacobian": coef[1:], "neutral": outline(x0), "lo": lo, "hi": hi, "x0": x0,
-            "params": np.array(VTL_CHANNELS), "toy_deltas": toy, "toy_names": np.array(list(TOY_CONTROLS)),
-            "n_points": np.array(n_points)}
+    return {
+        "intercept": coef[0],
+        "jacobian": coef[1:],
+        "neutral": outline(x0),
+        "lo": lo,
+        "hi": hi,
+        "x0": x0,
+        "params": np.array(VTL_CHANNELS),
+        "toy_deltas": toy,
+        "toy_names": np.array(list(TOY_CONTROLS)),
+        "n_points": np.array(n_points),
+    }
 
 
 @lru_cache(maxsize=1)
@@ -186,8 +196,9 @@ def vtl_ribbon(channels) -> MorphMesh:
     def to_weights(values):
         return (np.asarray(values, dtype=float) - lo[cols]) / span[cols]
 
-    return MorphMesh(positions, indices, targets, tuple(channels), (x0[cols] - lo[cols]) / span[cols],
-                     to_weights, "vtl")
+    return MorphMesh(
+        positions, indices, targets, tuple(channels), (x0[cols] - lo[cols]) / span[cols], to_weights, "vtl"
+    )
 
 
 def toy_ribbon(channels) -> MorphMesh:
@@ -196,8 +207,9 @@ def toy_ribbon(channels) -> MorphMesh:
     names = [str(p) for p in data["toy_names"]]
     cols = [names.index(c) for c in channels]
     positions, indices, targets = _ribbon(data["neutral"], data["toy_deltas"][cols], int(data["n_points"]))
-    return MorphMesh(positions, indices, targets, tuple(channels), np.zeros(len(cols)),
-                     lambda v: np.asarray(v, dtype=float), "toy")
+    return MorphMesh(
+        positions, indices, targets, tuple(channels), np.zeros(len(cols)), lambda v: np.asarray(v, dtype=float), "toy"
+    )
 
 
 def bars_mesh(channels, *, size: float = 0.01) -> MorphMesh:
@@ -206,16 +218,23 @@ def bars_mesh(channels, *, size: float = 0.01) -> MorphMesh:
     k = np.arange(n, dtype=float)
     x0, x1 = k * 1.5 * size, (k * 1.5 + 1.0) * size
     y0, y1 = np.zeros(n), np.full(n, 0.5 * size)
-    positions = np.stack([np.column_stack([x0, y0, np.zeros(n)]), np.column_stack([x1, y0, np.zeros(n)]),
-                          np.column_stack([x0, y1, np.zeros(n)]), np.column_stack([x1, y1, np.zeros(n)])],
-                         axis=1).reshape(-1, 3)
+    positions = np.stack(
+        [
+            np.column_stack([x0, y0, np.zeros(n)]),
+            np.column_stack([x1, y0, np.zeros(n)]),
+            np.column_stack([x0, y1, np.zeros(n)]),
+            np.column_stack([x1, y1, np.zeros(n)]),
+        ],
+        axis=1,
+    ).reshape(-1, 3)
     base = 4 * np.arange(n)[:, None]
     indices = (base + np.array([0, 1, 2, 2, 1, 3])).ravel()
     targets = np.zeros((n, 4 * n, 3))
     for j in range(n):
-        targets[j, 4 * j + 2:4 * j + 4, 1] = 10 * size  # the top edge rises
-    return MorphMesh(positions, indices, targets, tuple(channels), np.zeros(n),
-                     lambda v: np.asarray(v, dtype=float), "bars")
+        targets[j, 4 * j + 2 : 4 * j + 4, 1] = 10 * size  # the top edge rises
+    return MorphMesh(
+        positions, indices, targets, tuple(channels), np.zeros(n), lambda v: np.asarray(v, dtype=float), "bars"
+    )
 
 
 def own_mesh(channels, kind: str = "auto", *, source=None) -> MorphMesh:
@@ -225,6 +244,7 @@ def own_mesh(channels, kind: str = "auto", *, source=None) -> MorphMesh:
     parameter, the toy ribbon when every channel is a toy-rig control, else bars.
     """
     from dam.corpus import DataError
+
     data = _bundled()
     known = {"vtl": {str(p) for p in data["params"]}, "toy": {str(p) for p in data["toy_names"]}}
     if kind == "auto":
@@ -235,8 +255,9 @@ def own_mesh(channels, kind: str = "auto", *, source=None) -> MorphMesh:
         raise DataError(source, "mesh", kind, "unknown mesh; use 'auto', 'vtl', 'toy' or 'bars'")
     missing = [c for c in channels if c not in known[kind]]
     if missing:
-        raise DataError(source, "channels", missing, f"not controls of the {kind} ribbon",
-                        f"its controls are {sorted(known[kind])}")
+        raise DataError(
+            source, "channels", missing, f"not controls of the {kind} ribbon", f"its controls are {sorted(known[kind])}"
+        )
     return vtl_ribbon(channels) if kind == "vtl" else toy_ribbon(channels)
 
 
@@ -244,6 +265,7 @@ def _main() -> None:  # pragma: no cover - regenerates the bundled file
     data = vtl_ribbon_data()
     os.makedirs(os.path.dirname(RIBBON_PATH), exist_ok=True)
     from dam.corpus.atomic import atomic_write
+
     with atomic_write(RIBBON_PATH, "wb") as fh:
         np.savez_compressed(fh, **data)
     print(f"wrote {RIBBON_PATH}")

@@ -18,6 +18,7 @@ Presets
     RR aa E ih oh ou``), as the blendshape names ``viseme_sil`` ... ``viseme_ou``
     that avatar rigs carry (e.g. Ready Player Me).
 """
+
 from __future__ import annotations
 
 import json
@@ -28,23 +29,76 @@ import numpy as np
 from dam.corpus import DataError
 from dam.corpus.atomic import atomic_write
 
-__all__ = ["ARKIT_52", "OCULUS_15", "PRESETS", "preset_names", "LinearMap", "TOY_TO_ARKIT", "TOY_TO_OCULUS",
-           "SAMPA_TO_OCULUS", "OCULUS_TO_ARKIT"]
+__all__ = [
+    "ARKIT_52",
+    "OCULUS_15",
+    "PRESETS",
+    "preset_names",
+    "LinearMap",
+    "TOY_TO_ARKIT",
+    "TOY_TO_OCULUS",
+    "SAMPA_TO_OCULUS",
+    "OCULUS_TO_ARKIT",
+]
 
 ARKIT_52 = (
-    "eyeBlinkLeft", "eyeLookDownLeft", "eyeLookInLeft", "eyeLookOutLeft", "eyeLookUpLeft", "eyeSquintLeft",
-    "eyeWideLeft", "eyeBlinkRight", "eyeLookDownRight", "eyeLookInRight", "eyeLookOutRight", "eyeLookUpRight",
-    "eyeSquintRight", "eyeWideRight", "jawForward", "jawLeft", "jawRight", "jawOpen", "mouthClose",
-    "mouthFunnel", "mouthPucker", "mouthLeft", "mouthRight", "mouthSmileLeft", "mouthSmileRight",
-    "mouthFrownLeft", "mouthFrownRight", "mouthDimpleLeft", "mouthDimpleRight", "mouthStretchLeft",
-    "mouthStretchRight", "mouthRollLower", "mouthRollUpper", "mouthShrugLower", "mouthShrugUpper",
-    "mouthPressLeft", "mouthPressRight", "mouthLowerDownLeft", "mouthLowerDownRight", "mouthUpperUpLeft",
-    "mouthUpperUpRight", "browDownLeft", "browDownRight", "browInnerUp", "browOuterUpLeft", "browOuterUpRight",
-    "cheekPuff", "cheekSquintLeft", "cheekSquintRight", "noseSneerLeft", "noseSneerRight", "tongueOut",
+    "eyeBlinkLeft",
+    "eyeLookDownLeft",
+    "eyeLookInLeft",
+    "eyeLookOutLeft",
+    "eyeLookUpLeft",
+    "eyeSquintLeft",
+    "eyeWideLeft",
+    "eyeBlinkRight",
+    "eyeLookDownRight",
+    "eyeLookInRight",
+    "eyeLookOutRight",
+    "eyeLookUpRight",
+    "eyeSquintRight",
+    "eyeWideRight",
+    "jawForward",
+    "jawLeft",
+    "jawRight",
+    "jawOpen",
+    "mouthClose",
+    "mouthFunnel",
+    "mouthPucker",
+    "mouthLeft",
+    "mouthRight",
+    "mouthSmileLeft",
+    "mouthSmileRight",
+    "mouthFrownLeft",
+    "mouthFrownRight",
+    "mouthDimpleLeft",
+    "mouthDimpleRight",
+    "mouthStretchLeft",
+    "mouthStretchRight",
+    "mouthRollLower",
+    "mouthRollUpper",
+    "mouthShrugLower",
+    "mouthShrugUpper",
+    "mouthPressLeft",
+    "mouthPressRight",
+    "mouthLowerDownLeft",
+    "mouthLowerDownRight",
+    "mouthUpperUpLeft",
+    "mouthUpperUpRight",
+    "browDownLeft",
+    "browDownRight",
+    "browInnerUp",
+    "browOuterUpLeft",
+    "browOuterUpRight",
+    "cheekPuff",
+    "cheekSquintLeft",
+    "cheekSquintRight",
+    "noseSneerLeft",
+    "noseSneerRight",
+    "tongueOut",
 )
 
-OCULUS_15 = tuple(f"viseme_{v}" for v in
-                  ("sil", "PP", "FF", "TH", "DD", "kk", "CH", "SS", "nn", "RR", "aa", "E", "ih", "oh", "ou"))
+OCULUS_15 = tuple(
+    f"viseme_{v}" for v in ("sil", "PP", "FF", "TH", "DD", "kk", "CH", "SS", "nn", "RR", "aa", "E", "ih", "oh", "ou")
+)
 
 PRESETS = {"arkit": ARKIT_52, "oculus": OCULUS_15}
 
@@ -72,12 +126,48 @@ _HAND_MAPS = {("toy", "arkit"): TOY_TO_ARKIT, ("toy", "oculus"): TOY_TO_OCULUS}
 #: Choices where German has no English counterpart: C (ich-Laut) and S as CH; ts as SS; x, N as kk;
 #: R as RR; h and j as the neighbouring open/close vowels aa and ih; rounded front vowels as ou.
 SAMPA_TO_OCULUS = {
-    "sil": "sil", "p": "PP", "b": "PP", "m": "PP", "f": "FF", "v": "FF", "t": "DD", "d": "DD",
-    "k": "kk", "g": "kk", "x": "kk", "N": "kk", "S": "CH", "C": "CH", "s": "SS", "z": "SS", "ts": "SS",
-    "n": "nn", "l": "nn", "R": "RR", "h": "aa", "j": "ih",
-    "a": "aa", "a:": "aa", "6": "aa", "aI": "aa", "aU": "aa", "@": "E", "E": "E", "E:": "E", "e:": "E",
-    "I": "ih", "i:": "ih", "O": "oh", "o:": "oh", "OY": "oh", "2:": "ou", "9": "oh", "U": "ou", "u:": "ou",
-    "Y": "ou", "y:": "ou",
+    "sil": "sil",
+    "p": "PP",
+    "b": "PP",
+    "m": "PP",
+    "f": "FF",
+    "v": "FF",
+    "t": "DD",
+    "d": "DD",
+    "k": "kk",
+    "g": "kk",
+    "x": "kk",
+    "N": "kk",
+    "S": "CH",
+    "C": "CH",
+    "s": "SS",
+    "z": "SS",
+    "ts": "SS",
+    "n": "nn",
+    "l": "nn",
+    "R": "RR",
+    "h": "aa",
+    "j": "ih",
+    "a": "aa",
+    "a:": "aa",
+    "6": "aa",
+    "aI": "aa",
+    "aU": "aa",
+    "@": "E",
+    "E": "E",
+    "E:": "E",
+    "e:": "E",
+    "I": "ih",
+    "i:": "ih",
+    "O": "oh",
+    "o:": "oh",
+    "OY": "oh",
+    "2:": "ou",
+    "9": "oh",
+    "U": "ou",
+    "u:": "ou",
+    "Y": "ou",
+    "y:": "ou",
 }
 
 #: Each Oculus viseme as ARKit blendshape weights (hand-made, after Apple's blendshape descriptions).
@@ -139,8 +229,12 @@ class LinearMap:
         self.source = source
         M = np.asarray(matrix, dtype=float)
         if M.shape != (len(self.sources), len(self.targets)):
-            raise DataError(source, "matrix", M.shape,
-                            f"must be (n_sources, n_targets) = ({len(self.sources)}, {len(self.targets)})")
+            raise DataError(
+                source,
+                "matrix",
+                M.shape,
+                f"must be (n_sources, n_targets) = ({len(self.sources)}, {len(self.targets)})",
+            )
         b = np.zeros(len(self.targets)) if offset is None else np.asarray(offset, dtype=float)
         if b.shape != (len(self.targets),):
             raise DataError(source, "offset", b.shape, f"must have one value per target ({len(self.targets)})")
@@ -153,8 +247,9 @@ class LinearMap:
             allowed = preset_names(preset)
             bad = [t for t in self.targets if t not in allowed]
             if bad:
-                raise DataError(source, "targets", bad, f"not names of the {preset} preset",
-                                f"its names are {list(allowed)}")
+                raise DataError(
+                    source, "targets", bad, f"not names of the {preset} preset", f"its names are {list(allowed)}"
+                )
         self.preset = preset
         self.matrix, self.offset = M, b
 
@@ -166,6 +261,7 @@ class LinearMap:
     def hand_made(cls, sources: str, preset: str) -> LinearMap:
         """One of the hand-made maps: ``("toy", "arkit")`` or ``("toy", "oculus")``; targets are the whole preset."""
         from dam.crossmap.outlines import TOY_CONTROLS
+
         key = (sources, str(preset).lower())
         if key not in _HAND_MAPS:
             raise DataError(None, "map", key, f"no hand-made map; there are {sorted(_HAND_MAPS)}")
@@ -197,7 +293,7 @@ class LinearMap:
             raise DataError(None, "values/weights", (X.shape, W.shape), "need paired 2-D frames (at least 2)")
         mx, mw = X.mean(0), W.mean(0)
         Xc = X - mx
-        lam = ridge * max(float((Xc ** 2).mean()), 1e-12) * len(X)
+        lam = ridge * max(float((Xc**2).mean()), 1e-12) * len(X)
         M = np.linalg.solve(Xc.T @ Xc + lam * np.eye(X.shape[1]), Xc.T @ (W - mw))
         return cls(sources, targets, M, mw - mx @ M, preset=preset)
 
@@ -205,11 +301,21 @@ class LinearMap:
         """The map ``other(self(x))``: ``self``'s targets must be ``other``'s sources (any order)."""
         missing = [t for t in other.sources if t not in self.targets]
         if missing:
-            raise DataError(other.source, "sources", missing, "not targets of the first map",
-                            f"its targets are {list(self.targets)}")
+            raise DataError(
+                other.source,
+                "sources",
+                missing,
+                "not targets of the first map",
+                f"its targets are {list(self.targets)}",
+            )
         cols = [self.targets.index(t) for t in other.sources]
-        return LinearMap(self.sources, other.targets, self.matrix[:, cols] @ other.matrix,
-                         self.offset[cols] @ other.matrix + other.offset, preset=other.preset)
+        return LinearMap(
+            self.sources,
+            other.targets,
+            self.matrix[:, cols] @ other.matrix,
+            self.offset[cols] @ other.matrix + other.offset,
+            preset=other.preset,
+        )
 
     @classmethod
     def from_phones(cls, corpus, table: dict, preset: str = "oculus", *, ridge: float = 1e-6) -> LinearMap:
@@ -227,6 +333,7 @@ class LinearMap:
         preset : str, default "oculus"
         """
         from dam.corpus import frame_labels
+
         targets = preset_names(preset)
         names = [t.removeprefix("viseme_") for t in targets]
         missing = sorted(corpus.phones - set(table))
@@ -246,6 +353,7 @@ class LinearMap:
         """VTL tract parameters -> ``"oculus"`` visemes (fitted on the bundled ``vtl`` corpus with
         :data:`SAMPA_TO_OCULUS`) or -> ``"arkit"`` (that map, then :data:`OCULUS_TO_ARKIT`)."""
         import dam.datasets
+
         preset = str(preset).lower()
         preset_names(preset)
         visemes = cls.from_phones(dam.datasets.load("vtl"), SAMPA_TO_OCULUS, "oculus")
@@ -262,15 +370,23 @@ class LinearMap:
         channels = list(channels)
         missing = [s for s in self.sources if s not in channels]
         if missing:
-            raise DataError(self.source, "sources", missing, "the model has no such channels",
-                            f"its channels are {channels}")
+            raise DataError(
+                self.source, "sources", missing, "the model has no such channels", f"its channels are {channels}"
+            )
         X = np.asarray(values, dtype=float)[:, [channels.index(s) for s in self.sources]]
         return X @ self.matrix + self.offset
 
     # -- files ---------------------------------------------------------------------------------
     def to_dict(self) -> dict:
-        return {"format": "dam-linear-map", "version": 1, "preset": self.preset, "sources": list(self.sources),
-                "targets": list(self.targets), "matrix": self.matrix.tolist(), "offset": self.offset.tolist()}
+        return {
+            "format": "dam-linear-map",
+            "version": 1,
+            "preset": self.preset,
+            "sources": list(self.sources),
+            "targets": list(self.targets),
+            "matrix": self.matrix.tolist(),
+            "offset": self.offset.tolist(),
+        }
 
     def save(self, path) -> None:
         """Write the map as JSON (atomically)."""
@@ -285,6 +401,7 @@ class LinearMap:
         ``matrix`` may instead be a dict ``{source: {target: gain}}``.
         """
         from .tables import read_json_object
+
         path = os.fspath(path)
         doc = read_json_object(path, "map")
         preset = doc.get("preset")
@@ -301,8 +418,7 @@ class LinearMap:
                     raise DataError(path, "matrix", s, "a source not listed in 'sources'")
                 for t, g in row.items():
                     if t not in targets:
-                        raise DataError(path, f"matrix[{s!r}]", t, "not a target name",
-                                        f"targets: {targets}")
+                        raise DataError(path, f"matrix[{s!r}]", t, "not a target name", f"targets: {targets}")
                     dense[sources.index(s), targets.index(t)] = float(g)
             M = dense
         elif "sources" not in doc or M is None:

@@ -25,6 +25,7 @@ For the DAM a frame is final when
 Other models are streamed through :class:`BufferedStream`: nothing is final
 before :meth:`finish` (infinite lookahead), which is exact and honest.
 """
+
 from __future__ import annotations
 
 import math
@@ -39,6 +40,7 @@ __all__ = ["StreamingSynthesizer", "BufferedStream", "stream"]
 def stream(model, **kw):
     """A streaming synthesizer for ``model``: exact incremental for the DAM, buffered otherwise."""
     from dam.model import DAM
+
     if isinstance(model, DAM):
         return StreamingSynthesizer(model, **kw)
     kw.pop("max_duration", None)
@@ -54,8 +56,8 @@ class _Stream:
         self.frame_rate = float(model.frame_rate_)
         self.channels = tuple(model.channels_)
         self.source = source or "<stream>"
-        self.raw: list[str] = []        # labels as pushed (canonical silence), for the alignment
-        self.labels: list[str] = []     # the model's labels (after any fallback)
+        self.raw: list[str] = []  # labels as pushed (canonical silence), for the alignment
+        self.labels: list[str] = []  # the model's labels (after any fallback)
         self.starts: list[float] = []
         self.ends: list[float] = []
         self.n_emitted = 0
@@ -75,22 +77,34 @@ class _Stream:
         if self.finished:
             raise DataError(self.source, "push", label, "the utterance is finished")
         if (end is None) == (duration is None):
-            raise DataError(self.source, f"phone {len(self.labels)} ({label!r})", (end, duration),
-                            "give exactly one of end= and duration=")
+            raise DataError(
+                self.source,
+                f"phone {len(self.labels)} ({label!r})",
+                (end, duration),
+                "give exactly one of end= and duration=",
+            )
         start = self.end
         end = start + float(duration) if end is None else float(end)
         d = end - start
         if not (math.isfinite(end) and d > 1e-9):
-            raise DataError(self.source, f"phone {len(self.labels)} ({label!r}) end", end,
-                            f"must be finite and after the previous end {start:g}")
+            raise DataError(
+                self.source,
+                f"phone {len(self.labels)} ({label!r}) end",
+                end,
+                f"must be finite and after the previous end {start:g}",
+            )
         one = Alignment([label], [0.0], [d], source=self.source)
         merge = bool(self.raw) and one.labels[0] == one.silence == self.raw[-1]
         total = end - self.starts[-1] if merge else d
         if total > max_duration + 1e-9:
-            raise DataError(self.source, f"phone {len(self.labels)} ({label!r}) duration", total,
-                            f"longer than max_duration={max_duration:g} s, the bound the stream's "
-                            "lookahead was promised for" + (" (adjacent silences merge)" if merge else ""),
-                            "create the stream with a larger max_duration")
+            raise DataError(
+                self.source,
+                f"phone {len(self.labels)} ({label!r}) duration",
+                total,
+                f"longer than max_duration={max_duration:g} s, the bound the stream's "
+                "lookahead was promised for" + (" (adjacent silences merge)" if merge else ""),
+                "create the stream with a larger max_duration",
+            )
         if merge:
             self.ends[-1] = end
             return None
@@ -180,6 +194,7 @@ class StreamingSynthesizer(_Stream):
 
     def __init__(self, model, *, max_duration: float = 0.5, source=None):
         from dam.model.dominance import reach
+
         super().__init__(model, source=source)
         try:
             self.max_duration = float(max_duration)
@@ -195,21 +210,22 @@ class StreamingSynthesizer(_Stream):
         count = np.array([m.phone_modes_[p][1] for p in names], dtype=np.int64)
         self._count = count
         self._G = int(count.max())
-        sig_phone = np.array([m.sigma_[f:f + c].max() for f, c in zip(self._first, count)])
+        sig_phone = np.array([m.sigma_[f : f + c].max() for f, c in zip(self._first, count)])
         self._reach_phone = reach(sig_phone, self._eps, self._tol)
         self.reach = float(reach(m.sigma_.max(), self._eps, self._tol))
         self.lookahead = self.reach * self.max_duration
-        self.lookahead_frames = math.inf if not math.isfinite(self.lookahead) else \
-            int(math.ceil(self.lookahead * self.frame_rate))
+        self.lookahead_frames = (
+            math.inf if not math.isfinite(self.lookahead) else int(math.ceil(self.lookahead * self.frame_rate))
+        )
         self._pid: list[int] = []
-        self._acc = None            # Viterbi costs of the modes of the last costed segment, (G,)
-        self._back: list = []       # back pointers per costed segment (None for the first)
+        self._acc = None  # Viterbi costs of the modes of the last costed segment, (G,)
+        self._back: list = []  # back pointers per costed segment (None for the first)
         self._decided: list[int] = []  # global mode of segments 0 .. len-1
 
     # -- mode choice: Viterbi over the same node and edge costs A* minimises ----------------
     def _pad(self, row, fill=np.inf):
         out = np.full(self._G, fill)
-        out[:len(row)] = row
+        out[: len(row)] = row
         return out
 
     def _costs(self, lo: int, hi: int):
@@ -222,7 +238,7 @@ class StreamingSynthesizer(_Stream):
         """``w_c E_c`` of segment j's modes with its real neighbours (the utterance edge if none)."""
         lo = max(j - 1, 0)
         nodes, _ = self._costs(lo, j + 1 if last else j + 2)
-        return self._pad(nodes[j - lo, :self._count[self._pid[j]]])
+        return self._pad(nodes[j - lo, : self._count[self._pid[j]]])
 
     def _edge(self, j: int) -> np.ndarray:
         """``w_s E_s`` from segment j - 1 to j, shape (G, G)."""
@@ -260,7 +276,7 @@ class StreamingSynthesizer(_Stream):
         else:
             alive = np.flatnonzero(np.isfinite(self._acc))
             paths = [self._trace(int(g), k) for g in alive]
-        paths = np.array(paths)                      # (n_paths, n_costed - k)
+        paths = np.array(paths)  # (n_paths, n_costed - k)
         agree = np.all(paths == paths[0], axis=0)
         n_new = len(agree) if agree.all() else int(np.argmin(agree))
         for i in range(n_new):
@@ -271,6 +287,7 @@ class StreamingSynthesizer(_Stream):
     def _frames(self, a: int, b: int) -> np.ndarray:
         """Frames a .. b-1 from the decided segments (times shifted by a frames: O(1) per call)."""
         from dam.model.synthesis import concatenate
+
         C = len(self.channels)
         if b <= a:
             return np.zeros((0, C))
@@ -284,8 +301,18 @@ class StreamingSynthesizer(_Stream):
             return np.zeros((b - a, C))
         glob = np.array(self._decided)[use]
         m = self.model
-        return concatenate(s[use] - t0, e[use] - t0, m.coef_[glob], m.sigma_[glob], self.frame_rate, b - a,
-                           normalize=bool(m.normalize), extrapolate=m.extrapolate, eps=self._eps, tol=self._tol)
+        return concatenate(
+            s[use] - t0,
+            e[use] - t0,
+            m.coef_[glob],
+            m.sigma_[glob],
+            self.frame_rate,
+            b - a,
+            normalize=bool(m.normalize),
+            extrapolate=m.extrapolate,
+            eps=self._eps,
+            tol=self._tol,
+        )
 
     def _emit(self, bound_frames: int) -> np.ndarray:
         a = self.n_emitted
@@ -310,14 +337,14 @@ class StreamingSynthesizer(_Stream):
             self._pid.append(self._index[lab])
             j = len(self._pid) - 1
             if j >= 1:
-                self._step(j - 1, last=False)    # segment j-1 now has its right neighbour and final length
+                self._step(j - 1, last=False)  # segment j-1 now has its right neighbour and final length
                 self._decide(final=False)
         undecided = range(len(self._decided), len(self._pid))
         bound = self.end - self.lookahead
         for i in undecided:
             d = self.ends[i] - self.starts[i]
             if i == len(self._pid) - 1 and self.raw[i] == self.alignment_silence:
-                d = self.max_duration            # a trailing silence may still grow (silences merge)
+                d = self.max_duration  # a trailing silence may still grow (silences merge)
             bound = min(bound, self.starts[i] - self._reach_phone[self._pid[i]] * d)
         if not math.isfinite(bound):
             return np.zeros((0, len(self.channels)))
@@ -329,7 +356,7 @@ class StreamingSynthesizer(_Stream):
             raise DataError(self.source, "phones", 0, "no phone was pushed")
         if self.finished:
             return np.zeros((0, len(self.channels)))
-        if len(self._pid) == 1:     # a graph of one segment: the model's own choice
+        if len(self._pid) == 1:  # a graph of one segment: the model's own choice
             self._decided = [int(g) for g in self.model.select_modes(self.alignment())[0]]
         else:
             self._step(len(self._pid) - 1, last=True)

@@ -12,6 +12,7 @@ JSON animation format (``"format": "dam-animation"``, version 1)::
 Frame ``i`` is at ``i / frame_rate`` seconds. Floats are written with
 Python's shortest round-trip representation, so values read back exactly.
 """
+
 from __future__ import annotations
 
 import json
@@ -28,8 +29,16 @@ from dam.corpus.atomic import atomic_write
 JSON_FORMAT = "dam-animation"
 JSON_VERSION = 1
 
-__all__ = ["ExportReport", "Animation", "check_animation", "write_csv", "write_json", "read_animation",
-           "JSON_FORMAT", "JSON_VERSION"]
+__all__ = [
+    "ExportReport",
+    "Animation",
+    "check_animation",
+    "write_csv",
+    "write_json",
+    "read_animation",
+    "JSON_FORMAT",
+    "JSON_VERSION",
+]
 
 
 @dataclass
@@ -116,12 +125,17 @@ def check_animation(trajectories, channels, frame_rate, source, alignment=None):
         channels = [channels]
     channels = tuple(str(c) for c in channels)
     if len(channels) != values.shape[1]:
-        raise DataError(source, "channels", len(channels),
-                        f"the trajectories have {values.shape[1]} columns but {len(channels)} channel names")
+        raise DataError(
+            source,
+            "channels",
+            len(channels),
+            f"the trajectories have {values.shape[1]} columns but {len(channels)} channel names",
+        )
     for c in channels:
         if not c.strip() or any(ch in c for ch in ',"\n\r'):
-            raise DataError(source, "channels", c, "a channel name must be non-empty without commas, "
-                            "quotes or line breaks")
+            raise DataError(
+                source, "channels", c, "a channel name must be non-empty without commas, quotes or line breaks"
+            )
     if len(set(channels)) != len(channels):
         dup = next(c for c in channels if channels.count(c) > 1)
         raise DataError(source, "channels", dup, "duplicate channel name")
@@ -134,16 +148,24 @@ def check_animation(trajectories, channels, frame_rate, source, alignment=None):
     bad = np.argwhere(~np.isfinite(values))
     if bad.size:
         i, j = (int(v) for v in bad[0])
-        raise DataError(source, f"trajectories[{i}, {channels[j]!r}] (t={i / fr:.3f} s)", float(values[i, j]),
-                        "value is not finite", f"{len(bad)} non-finite value(s) in all")
+        raise DataError(
+            source,
+            f"trajectories[{i}, {channels[j]!r}] (t={i / fr:.3f} s)",
+            float(values[i, j]),
+            "value is not finite",
+            f"{len(bad)} non-finite value(s) in all",
+        )
     if alignment is not None:
         if not isinstance(alignment, Alignment):
             raise DataError(source, "alignment", type(alignment).__name__, "must be a dam.Alignment")
         need = alignment.n_frames(fr)
         if abs(need - values.shape[0]) > 1:
-            raise DataError(source, "alignment", f"{alignment.duration:.4f} s",
-                            f"covers {need} frames at {fr:g} frames/s but the trajectories have "
-                            f"{values.shape[0]}")
+            raise DataError(
+                source,
+                "alignment",
+                f"{alignment.duration:.4f} s",
+                f"covers {need} frames at {fr:g} frames/s but the trajectories have {values.shape[0]}",
+            )
     return values, channels, fr
 
 
@@ -164,8 +186,9 @@ def _no_options(fmt, source, options):
         raise DataError(source, name, options[name], f"not an option of the {fmt} format")
 
 
-def write_csv(values, path, *, channels, frame_rate, alignment=None, metadata=None, decimals=None,
-              **options) -> ExportReport:
+def write_csv(
+    values, path, *, channels, frame_rate, alignment=None, metadata=None, decimals=None, **options
+) -> ExportReport:
     """Write a CSV: a ``time`` column (``i / frame_rate``) and one column per channel.
 
     Parameters
@@ -179,6 +202,7 @@ def write_csv(values, path, *, channels, frame_rate, alignment=None, metadata=No
         Significant digits; None writes every float exactly (``%.17g``).
     """
     from dam.corpus import write_csv as write_table  # the corpus CSV layout, read back by load_corpus
+
     _no_options("csv", path, options)
     values, channels, frame_rate = check_animation(values, channels, frame_rate, path, alignment)
     write_table(values, channels, path, frame_rate=frame_rate, decimals=decimals)  # atomic itself
@@ -187,6 +211,7 @@ def write_csv(values, path, *, channels, frame_rate, alignment=None, metadata=No
 
 def _toolkit():
     from dam._version import __version__
+
     return {"name": "dam", "version": __version__}
 
 
@@ -195,8 +220,9 @@ def _model_entry(metadata):
     return model if model is None or isinstance(model, (str, dict)) else str(model)
 
 
-def write_json(values, path, *, channels, frame_rate, alignment=None, metadata=None, modes=None,
-               **options) -> ExportReport:
+def write_json(
+    values, path, *, channels, frame_rate, alignment=None, metadata=None, modes=None, **options
+) -> ExportReport:
     """Write the JSON animation format described in this module's docstring.
 
     Parameters
@@ -217,15 +243,25 @@ def write_json(values, path, *, channels, frame_rate, alignment=None, metadata=N
     modes = _check_modes(modes, alignment, path)
     phones = None
     if alignment is not None:
-        phones = [{"label": lab, "start": float(s), "end": float(e)}
-                  for lab, s, e in zip(alignment.labels, alignment.starts, alignment.ends)]
+        phones = [
+            {"label": lab, "start": float(s), "end": float(e)}
+            for lab, s, e in zip(alignment.labels, alignment.starts, alignment.ends)
+        ]
         for p, m in zip(phones, modes or ()):
             p["mode"] = m
     meta = {k: v for k, v in (metadata or {}).items() if k != "model"}
-    doc = {"format": JSON_FORMAT, "version": JSON_VERSION, "toolkit": _toolkit(),
-           "frame_rate": frame_rate, "n_frames": int(values.shape[0]), "channels": list(channels),
-           "phones": phones, "model": _model_entry(metadata), "metadata": meta,
-           "values": values.tolist()}
+    doc = {
+        "format": JSON_FORMAT,
+        "version": JSON_VERSION,
+        "toolkit": _toolkit(),
+        "frame_rate": frame_rate,
+        "n_frames": int(values.shape[0]),
+        "channels": list(channels),
+        "phones": phones,
+        "model": _model_entry(metadata),
+        "metadata": meta,
+        "values": values.tolist(),
+    }
     try:
         text = json.dumps(doc, allow_nan=False)
     except TypeError as exc:
@@ -265,8 +301,9 @@ def _read_json(path: str) -> Animation:
     if doc.get("phones"):
         try:
             ph = doc["phones"]
-            alignment = Alignment([p["label"] for p in ph], [p["start"] for p in ph], [p["end"] for p in ph],
-                                  source=path)
+            alignment = Alignment(
+                [p["label"] for p in ph], [p["start"] for p in ph], [p["end"] for p in ph], source=path
+            )
             if all("mode" in p for p in ph):
                 modes = tuple(int(p["mode"]) for p in ph)
         except (KeyError, TypeError) as exc:
@@ -289,6 +326,7 @@ def read_animation(path) -> Animation:
         JSON also the ``alignment``, ``modes`` and ``metadata``.
     """
     from dam.corpus import read_trajectory
+
     path = os.fspath(path)
     suffix = os.path.splitext(path)[1].lower()
     if suffix == ".json":

@@ -6,6 +6,7 @@ DAM chose for that phone (its local index, ``0 .. n_modes - 1``, as
 :meth:`dam.model.DAM.synthesize` takes them). Written with praatio, the
 library :func:`dam.corpus.read_textgrid` reads with.
 """
+
 from __future__ import annotations
 
 from dam.corpus import DataError
@@ -36,8 +37,9 @@ def chosen_modes(model, alignment):
     return [int(g - model.phone_modes_[lab][0]) for g, lab in zip(glob, labels)]
 
 
-def write_phones_textgrid(values, path, *, channels, frame_rate, alignment=None, metadata=None, modes=None,
-                          **options) -> ExportReport:
+def write_phones_textgrid(
+    values, path, *, channels, frame_rate, alignment=None, metadata=None, modes=None, **options
+) -> ExportReport:
     """Write the phones (and modes) of an animation as a long-format Praat TextGrid.
 
     Parameters
@@ -55,6 +57,7 @@ def write_phones_textgrid(values, path, *, channels, frame_rate, alignment=None,
         Local mode per segment (:func:`chosen_modes`); adds the ``modes`` tier.
     """
     from praatio import textgrid as ptg
+
     if options:
         name = sorted(options)[0]
         raise DataError(path, name, options[name], "not an option of the TextGrid format")

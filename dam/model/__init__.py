@@ -20,13 +20,13 @@ The estimator :class:`DAM` (and the presets :class:`DAMM0`, M = 0, and :class:`D
 paper's literal plain-sum Eq. (2) with M = 4) lives in
 :mod:`~dam.model.estimator`; :func:`inspect_report` in :mod:`~dam.model.inspection`.
 """
+
 from __future__ import annotations
 
 from dam._lazy import lazy_exports
 
 _EXPORTS = {"DAM": ".estimator", "DAMM0": ".estimator", "DAMPaper": ".estimator", "inspect_report": ".inspection"}
-_SUBMODULES = ("dominance", "animeme", "modes", "estep", "mstep", "em", "astar", "synthesis", "estimator",
-               "inspection")
+_SUBMODULES = ("dominance", "animeme", "modes", "estep", "mstep", "em", "astar", "synthesis", "estimator", "inspection")
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBMODULES)
 
 __all__ = ["DAM", "DAMM0", "DAMPaper", "inspect_report"]

@@ -12,14 +12,14 @@ Outside [0, 1] the animeme is either the polynomial itself (the paper:
 
 numpy only: this module is on the load + predict path of a saved model.
 """
+
 from __future__ import annotations
 
 from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["EXTRAPOLATE", "basis", "evaluate", "boundary_derivatives",
-           "legendre_to_monomial", "monomial_to_legendre"]
+__all__ = ["EXTRAPOLATE", "basis", "evaluate", "boundary_derivatives", "legendre_to_monomial", "monomial_to_legendre"]
 
 EXTRAPOLATE = ("polynomial", "hold")
 
@@ -133,5 +133,5 @@ def boundary_derivatives(coef, order: int = 2) -> np.ndarray:
     """
     coef = np.asarray(coef, dtype=float)
     E = _edge_derivative_matrix(coef.shape[-2] - 1, order)
-    out = E.reshape(-1, E.shape[-1]) @ coef              # (..., 2 (order + 1), C): matmul broadcasts
+    out = E.reshape(-1, E.shape[-1]) @ coef  # (..., 2 (order + 1), C): matmul broadcasts
     return out.reshape(coef.shape[:-2] + E.shape[:2] + coef.shape[-1:])

@@ -35,6 +35,7 @@ graph, built once at the end of fit and at load.
 
 numpy only: this module is on the load + predict path of a saved model.
 """
+
 from __future__ import annotations
 
 import heapq
@@ -42,8 +43,21 @@ import itertools
 
 import numpy as np
 
-__all__ = ["BOUNDARY", "context_counts", "mode_nll", "smoothness_costs", "pad_layers", "astar",
-           "astar_blocks", "free_path", "chain_dp", "viterbi", "exhaustive", "path_cost", "ModeGraph"]
+__all__ = [
+    "BOUNDARY",
+    "context_counts",
+    "mode_nll",
+    "smoothness_costs",
+    "pad_layers",
+    "astar",
+    "astar_blocks",
+    "free_path",
+    "chain_dp",
+    "viterbi",
+    "exhaustive",
+    "path_cost",
+    "ModeGraph",
+]
 
 BOUNDARY = "#"
 
@@ -106,8 +120,9 @@ def mode_nll(stats: dict, phone: str, left: str, right: str, n_modes: int, alpha
     return -np.log(_smoothed(st["unigram"], alpha)), "unigram"
 
 
-def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev, dur_cur,
-                     tau: float, scale: np.ndarray) -> np.ndarray:
+def smoothness_costs(
+    edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev, dur_cur, tau: float, scale: np.ndarray
+) -> np.ndarray:
     """``E_s`` for every pair (mode of segment j-1, mode of segment j).
 
     Parameters
@@ -133,11 +148,10 @@ def smoothness_costs(edge_prev: np.ndarray, edge_cur: np.ndarray, dur_prev, dur_
     dc = np.asarray(dur_cur, dtype=float)[..., None, None, None]
     p = edge_prev * ((tau / dp) ** k / scale)
     c = edge_cur * ((tau / dc) ** k / scale)
-    p = p.reshape(p.shape[:-2] + (-1,))                 # (..., G_prev, 3 C)
+    p = p.reshape(p.shape[:-2] + (-1,))  # (..., G_prev, 3 C)
     c = c.reshape(c.shape[:-2] + (-1,))
     # |p - c|^2 = |p|^2 + |c|^2 - 2 p.c: one matrix product instead of a (G, G, 3, C) difference
-    cost = (p * p).sum(axis=-1)[..., :, None] + (c * c).sum(axis=-1)[..., None, :] \
-        - 2.0 * (p @ np.swapaxes(c, -1, -2))
+    cost = (p * p).sum(axis=-1)[..., :, None] + (c * c).sum(axis=-1)[..., None, :] - 2.0 * (p @ np.swapaxes(c, -1, -2))
     return np.maximum(cost, 0.0)
 
 
@@ -162,10 +176,10 @@ def pad_layers(node_costs, edge_costs):
     nodes = np.full((J, G), np.inf)
     edges = np.full((max(J - 1, 0), G, G), np.inf)
     for j, n in enumerate(node_costs):
-        nodes[j, :len(n)] = n
+        nodes[j, : len(n)] = n
     for j, e in enumerate(edge_costs):
         e = np.asarray(e, dtype=float)
-        edges[j, :e.shape[0], :e.shape[1]] = e
+        edges[j, : e.shape[0], : e.shape[1]] = e
     return nodes, edges
 
 
@@ -199,7 +213,7 @@ def astar(node_costs, edge_costs):
     # step of a path costs at least its layer's bound)
     step = (nodes_a[1:] + edges_a.min(axis=1)).min(axis=1) if J > 1 else np.zeros(0)
     h = np.concatenate([np.cumsum(step[::-1])[::-1], [0.0]]).tolist()
-    nodes, edges = nodes_a.tolist(), edges_a.tolist()   # plain floats: fast in the loop
+    nodes, edges = nodes_a.tolist(), edges_a.tolist()  # plain floats: fast in the loop
     inf = float("inf")
     best = {}
     parent = {}
@@ -278,7 +292,7 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     caller may leave them unset).
     """
     J = nodes.shape[0]
-    path = np.argmin(nodes, axis=1)          # the only node of a forced layer
+    path = np.argmin(nodes, axis=1)  # the only node of a forced layer
     if free is None:
         free = np.isfinite(nodes).sum(axis=1) > 1
     idx = np.flatnonzero(free)
@@ -288,7 +302,7 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     first = idx[np.concatenate(([0], cut + 1))]
     last = idx[np.concatenate((cut, [idx.size - 1]))]
     L = last - first + 1
-    acc = nodes[first]                                        # (n_blocks, G): fancy indexing copies
+    acc = nodes[first]  # (n_blocks, G): fancy indexing copies
     before = first > 0
     acc[before] += edges[first[before] - 1, path[first[before] - 1], :]
     n_max = int(L.max())
@@ -296,7 +310,7 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     for k in range(1, n_max):
         act = np.flatnonzero(L > k)
         j = first[act] + k
-        tot = acc[act][:, :, None] + edges[j - 1]             # (n_act, G_prev, G)
+        tot = acc[act][:, :, None] + edges[j - 1]  # (n_act, G_prev, G)
         arg = tot.argmin(axis=1)
         back.append((act, arg))
         acc[act] = np.take_along_axis(tot, arg[:, None, :], axis=1)[:, 0, :] + nodes[j]
@@ -383,7 +397,7 @@ class ModeGraph:
         self.index = {p: i for i, p in enumerate(names)}
         fc = np.array([phone_modes[p] for p in names], dtype=np.int64).reshape(-1, 2)
         self.first, self.count = fc[:, 0].copy(), fc[:, 1].copy()
-        P, B = len(names), len(names)                # context index B: the utterance edge
+        P, B = len(names), len(names)  # context index B: the utterance edge
         G = int(self.count.max()) if P else 1
         self.G = G
         ctx = {**self.index, BOUNDARY: B}
@@ -442,12 +456,13 @@ class ModeGraph:
 
             def smoothed(c):
                 return (c + alpha) / (c.sum(axis=1, keepdims=True) + alpha * g)
+
             prob = smoothed(self.unigram[p])
             ls, rs = self.left_seen[p, L], self.right_seen[p, R]
             bi = ls | rs
             if bi.any():
-                both = (ls[:, None] * smoothed(self.left[p, L]) + rs[:, None] * smoothed(self.right[p, R]))
-                n_seen = ls.astype(float) + rs.astype(float)      # (bool + bool is a logical or)
+                both = ls[:, None] * smoothed(self.left[p, L]) + rs[:, None] * smoothed(self.right[p, R])
+                n_seen = ls.astype(float) + rs.astype(float)  # (bool + bool is a logical or)
                 prob[bi] = both[bi] / n_seen[bi, None]
                 level[multi[bi]] = 1
             if self.tri_codes.size:
@@ -467,11 +482,12 @@ class ModeGraph:
         """``E_s`` at ``joints`` (joint j: segment j to j + 1), shape (len(joints), G_max, G_max),
         +inf to or from a missing mode; the animemes' edges from ``coef`` (n_modes, M + 1, C)."""
         from dam.model.animeme import boundary_derivatives
+
         G = self.G
         idx = first[:, None] + np.minimum(np.arange(G), count[:, None] - 1)
         d = np.asarray(durations, dtype=float)
-        prev = boundary_derivatives(coef[idx[joints]], order=2)[:, :, 1]       # (n_joints, G, 3, C) at t = 1
-        cur = boundary_derivatives(coef[idx[joints + 1]], order=2)[:, :, 0]    # at t = 0
+        prev = boundary_derivatives(coef[idx[joints]], order=2)[:, :, 1]  # (n_joints, G, 3, C) at t = 1
+        cur = boundary_derivatives(coef[idx[joints + 1]], order=2)[:, :, 0]  # at t = 0
         cost = smoothness_costs(prev, cur, d[joints], d[joints + 1], tau, scale)
         missing = np.arange(G) >= count[:, None]
         cost[missing[joints]] = np.inf

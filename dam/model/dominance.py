@@ -17,6 +17,7 @@ The jump this leaves at the window edge is at most ``tol``.
 
 numpy only: this module is on the load + predict path of a saved model.
 """
+
 from __future__ import annotations
 
 import numpy as np

@@ -15,6 +15,7 @@ The objective is ``sum_i f_i^2 + lambda ||a||^2`` (Eq. 4 plus the ridge, with
 steps minimise it (the E-step exactly, the M-step by accepted descent steps
 only), so it never increases; :class:`ConvergenceMonitor` records it.
 """
+
 from __future__ import annotations
 
 import sys
@@ -89,9 +90,21 @@ def fitted_values_all(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, pr)
     return np.stack([fitted_values(occ, coef[:, :, c], sigma, pr)[0] for c in range(coef.shape[2])], axis=1)
 
 
-def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float = 1e-6,
-           tol: float = 1e-3, max_iter: int = 50, gn_steps: int = 1, verbose: int = 0,
-           fixed_sigma: bool = False, projected: bool = True, channels=None, weights=None):
+def fit_em(
+    occ: Occurrences,
+    Y: np.ndarray,
+    *,
+    sigma_init="auto",
+    ridge: float = 1e-6,
+    tol: float = 1e-3,
+    max_iter: int = 50,
+    gn_steps: int = 1,
+    verbose: int = 0,
+    fixed_sigma: bool = False,
+    projected: bool = True,
+    channels=None,
+    weights=None,
+):
     """Fit every channel's animeme coefficients and sigmas.
 
     Parameters
@@ -156,10 +169,14 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
             G, XtY = normal_equations(occ, sig, Y, pr)
             A, _ = solve_normal_equations(G, XtY, lam)
         else:  # each channel has its own missing frames, hence its own normal equations
-            A = np.column_stack([solve_normal_equations(*normal_equations(occ, sig, Y[:, c], pr, weights[:, c]), lam)[0]
-                                 for c in range(n_ch)])
+            A = np.column_stack(
+                [
+                    solve_normal_equations(*normal_equations(occ, sig, Y[:, c], pr, weights[:, c]), lam)[0]
+                    for c in range(n_ch)
+                ]
+            )
         R = Y - fitted_values_all(occ, A.reshape(occ.n_modes, M1, n_ch), sig, pr)
-        R2 = R ** 2 if weights is None else weights * R ** 2
+        R2 = R**2 if weights is None else weights * R**2
         obj = (np.sum(R2, axis=0) + lam * np.sum(A * A, axis=0)) / occ.n_rows
         better = obj < best
         best[better] = obj[better]
@@ -168,11 +185,13 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
     coef = A0.copy()
     sigma = np.repeat(S0[None, :], occ.n_modes, axis=0)
     curves, n_iter, converged = [], np.zeros(n_ch, dtype=int), np.zeros(n_ch, dtype=bool)
-    unconverged = []     # (channel, last relative improvement) stopped by max_iter
+    unconverged = []  # (channel, last relative improvement) stopped by max_iter
 
     from dam.progress import track
-    for c in track(range(n_ch), "DAM EM", unit="channel",
-                   labels=None if channels is None else [str(ch) for ch in channels]):
+
+    for c in track(
+        range(n_ch), "DAM EM", unit="channel", labels=None if channels is None else [str(ch) for ch in channels]
+    ):
         y = Y[:, c]
         w = None if weights is None else weights[:, c]
         a = A0[:, :, c]
@@ -181,8 +200,9 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         mon.report(best[c])
         mu = 1e-3
         while not fixed_sigma and not mon.done:
-            s, a, obj, mu = gauss_newton_sigma(occ, y, a, s, lam=lam, projected=projected,
-                                               n_steps=gn_steps, mu=mu, weights=w)
+            s, a, obj, mu = gauss_newton_sigma(
+                occ, y, a, s, lam=lam, projected=projected, n_steps=gn_steps, mu=mu, weights=w
+            )
             if not projected:  # the E-step (the projected M-step re-solves a itself)
                 pr = pairs(occ, s)
                 G, Xty = normal_equations(occ, s, y, pr, w)
@@ -199,8 +219,10 @@ def fit_em(occ: Occurrences, Y: np.ndarray, *, sigma_init="auto", ridge: float =
         if not fixed_sigma and not mon.converged and len(mon.history) >= 2:
             unconverged.append((c, mon.last_improvement))
         if verbose > 1:
-            print(f"channel {c}: {mon.iter} iterations, objective {mon.history[0]:.4g} -> "
-                  f"{mon.history[-1]:.4g}", file=sys.stderr)
+            print(
+                f"channel {c}: {mon.iter} iterations, objective {mon.history[0]:.4g} -> {mon.history[-1]:.4g}",
+                file=sys.stderr,
+            )
     if unconverged:
         warn_not_converged(unconverged, channels, tol, max_iter)
     return coef, sigma, curves, n_iter, converged
@@ -219,6 +241,10 @@ def warn_not_converged(unconverged, channels, tol: float, max_iter: int) -> None
 
     names = [str(channels[c]) if channels is not None else f"channel {c}" for c, _ in unconverged]
     which = ", ".join(f"{n} (last relative improvement {imp:.3g})" for n, (_, imp) in zip(names, unconverged))
-    warnings.warn(f"DAM EM stopped at max_iter={max_iter} before the relative improvement fell below "
-                  f"tol={tol:g} on {len(names)} channel(s): {which}. Raise max_iter, or raise tol to "
-                  "accept this precision.", ConvergenceWarning, stacklevel=3)
+    warnings.warn(
+        f"DAM EM stopped at max_iter={max_iter} before the relative improvement fell below "
+        f"tol={tol:g} on {len(names)} channel(s): {which}. Raise max_iter, or raise tol to "
+        "accept this precision.",
+        ConvergenceWarning,
+        stacklevel=3,
+    )

@@ -15,6 +15,7 @@ densely by Cholesky. ``benchmarks/bench_dam.py`` measures both ways.
 With ``normalize=True`` (weighted average) every row is divided by the
 frame's summed dominance, which keeps the problem linear.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -26,8 +27,16 @@ from dam.model.animeme import basis
 from dam.model.dominance import dominance
 from dam.model.synthesis import segment_windows
 
-__all__ = ["Occurrences", "pairs", "design_values", "design_matrix", "gram", "normal_equations",
-           "solve_normal_equations", "fitted_values"]
+__all__ = [
+    "Occurrences",
+    "pairs",
+    "design_values",
+    "design_matrix",
+    "gram",
+    "normal_equations",
+    "solve_normal_equations",
+    "fitted_values",
+]
 
 
 @dataclass
@@ -69,7 +78,7 @@ class Occurrences:
     tol: float = 1e-4
 
     @classmethod
-    def from_corpus(cls, corpus, mode_of_segment, n_modes: int, **kw) -> "Occurrences":
+    def from_corpus(cls, corpus, mode_of_segment, n_modes: int, **kw) -> Occurrences:
         """``mode_of_segment``: one int array per utterance, the global mode of each segment."""
         starts, ends, nf, off, mode = [], [], [], [], []
         row = 0
@@ -82,8 +91,17 @@ class Occurrences:
             mode.append(np.asarray(m, dtype=int))
             row += u.n_frames
         cat = np.concatenate
-        return cls(cat(starts), cat(ends), cat(nf).astype(np.int64), cat(off).astype(np.int64),
-                   cat(mode), row, n_modes, corpus.frame_rate, **kw)
+        return cls(
+            cat(starts),
+            cat(ends),
+            cat(nf).astype(np.int64),
+            cat(off).astype(np.int64),
+            cat(mode),
+            row,
+            n_modes,
+            corpus.frame_rate,
+            **kw,
+        )
 
     @property
     def n_coef(self) -> int:
@@ -108,7 +126,7 @@ class Occurrences:
         """
         b = self.utterance_bounds
         modes, local = [], np.empty(len(self.mode), dtype=np.int64)
-        for u, (o0, o1) in enumerate(zip(b[:-1], b[1:])):
+        for _u, (o0, o1) in enumerate(zip(b[:-1], b[1:])):
             m, inv = np.unique(self.mode[o0:o1], return_inverse=True)
             modes.append(m)
             local[o0:o1] = inv
@@ -133,8 +151,7 @@ def pairs(occ: Occurrences, sigma: np.ndarray):
     D : ndarray, shape (n_pairs,)
     """
     s_occ = sigma[occ.mode]
-    k, frame, t = segment_windows(occ.starts, occ.ends, s_occ, occ.frame_rate, occ.n_frames,
-                                  occ.eps, occ.tol)
+    k, frame, t = segment_windows(occ.starts, occ.ends, s_occ, occ.frame_rate, occ.n_frames, occ.eps, occ.tol)
     D = dominance(t, s_occ[k], occ.eps, occ.tol)
     keep = D > 0.0
     k, frame, t, D = k[keep], frame[keep], t[keep], D[keep]
@@ -204,10 +221,10 @@ def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray, weights=None):
     key, local = np.unique(chunk * occ.n_modes + mode, return_inverse=True)
     key_chunk, key_mode = np.divmod(key, occ.n_modes)
     first_key = np.searchsorted(key_chunk, np.arange(n_chunks + 1))
-    L = np.diff(first_key)                                    # modes met, per chunk
+    L = np.diff(first_key)  # modes met, per chunk
     local = local - first_key[chunk]
     wsum = sum(v.shape[1] for v, _ in blocks)
-    width = L * wsum                                          # local columns per chunk
+    width = L * wsum  # local columns per chunk
     flat, off = [], 0
     for vals, _ in blocks:
         w = vals.shape[1]
@@ -223,10 +240,14 @@ def gram(occ: Occurrences, k, row, blocks, targets: np.ndarray, weights=None):
         r0, r1 = c * R, min((c + 1) * R, occ.n_rows)
         wu = int(width[c])
         Zl = np.bincount(flat[p0:p1].ravel(), weights=wts[p0:p1].ravel(), minlength=R * wu)
-        Zl = Zl.reshape(R, wu)[:r1 - r0]
-        m = key_mode[first_key[c]:first_key[c + 1]]
-        g = np.concatenate([base + (m[:, None] * w + np.arange(w)).ravel() for (v, base), w in
-                            zip(blocks, (v.shape[1] for v, _ in blocks))])
+        Zl = Zl.reshape(R, wu)[: r1 - r0]
+        m = key_mode[first_key[c] : first_key[c + 1]]
+        g = np.concatenate(
+            [
+                base + (m[:, None] * w + np.arange(w)).ravel()
+                for (v, base), w in zip(blocks, (v.shape[1] for v, _ in blocks))
+            ]
+        )
         yl = targets[r0:r1]
         if weights is not None:
             sw = np.sqrt(weights[r0:r1])[:, None]
@@ -270,14 +291,13 @@ def design_matrix(occ: Occurrences, sigma: np.ndarray, pr=None):
     pr = pairs(occ, sigma) if pr is None else pr
     vals, cols = design_values(occ, pr)
     row = pr[1]
-    order = np.argsort(row, kind="stable")   # CSR directly: rows in order, no COO pass
+    order = np.argsort(row, kind="stable")  # CSR directly: rows in order, no COO pass
     M1 = occ.degree + 1
     indptr = np.zeros(occ.n_rows + 1, dtype=np.int64)
     np.cumsum(np.bincount(row, minlength=occ.n_rows) * M1, out=indptr[1:])
     # Occurrences of one mode reaching the same frame leave duplicate
     # (row, column) entries: scipy sums them in every product, as Eq. (7) does.
-    return sparse.csr_matrix((vals[order].ravel(), cols[order].ravel(), indptr),
-                             shape=(occ.n_rows, occ.n_coef))
+    return sparse.csr_matrix((vals[order].ravel(), cols[order].ravel(), indptr), shape=(occ.n_rows, occ.n_coef))
 
 
 def solve_normal_equations(G: np.ndarray, XtY: np.ndarray, lam: float):

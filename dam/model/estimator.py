@@ -19,20 +19,20 @@ paper's model in one word.
 
 Loading a saved model and synthesizing imports numpy only.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
+from dam.base import Interval, Options, Synthesizer
+from dam.corpus.data import Alignment, Corpus
 from dam.model import animeme as _animeme
 from dam.model.astar import ModeGraph, astar, free_path, smoothness_costs
-from dam.base import Interval, Options, Synthesizer
-from dam.modelfile import StateArray, StateNames, StateRanges
-from dam.corpus.data import Alignment, Corpus
 from dam.model.dominance import dominance
 from dam.model.synthesis import concatenate
+from dam.modelfile import StateArray, StateNames, StateRanges
 
 __all__ = ["DAM", "DAMM0", "DAMPaper"]
-
 
 
 class DAM(Synthesizer):
@@ -179,8 +179,9 @@ class DAM(Synthesizer):
         "mode_preference": [Options({"median", "min"}), Interval(float, None, None)],
         "min_occurrences": [Interval(int, 1, None, closed="left")],
         "min_mode_size": [Interval(int, 1, None, closed="left")],
-        **dict.fromkeys(["ridge", "eps", "tol", "w_c", "w_s", "context_smoothing"],
-                        [Interval(float, 0, None, closed="left")]),
+        **dict.fromkeys(
+            ["ridge", "eps", "tol", "w_c", "w_s", "context_smoothing"], [Interval(float, 0, None, closed="left")]
+        ),
         "sigma_init": [Options({"auto"}), Interval(float, 0, None, closed="neither")],
         "max_iter": [Interval(int, 0, None, closed="left")],
         "gn_steps": [Interval(int, 1, None, closed="left")],
@@ -204,13 +205,32 @@ class DAM(Synthesizer):
         "converged_": StateArray("bool", ("n_channels",)),
     }
 
-    def __init__(self, *, degree: int = 4, normalize: bool = True, extrapolate: str = "polynomial",
-                 modes: str = "affinity", n_resample: int = 20, mode_preference="min",
-                 min_occurrences: int = 10, min_mode_size: int = 5, ridge: float = 1e-6,
-                 eps: float = 1e-8, sigma_init="auto", tol: float = 1e-3, max_iter: int = 30,
-                 gn_steps: int = 1, w_c: float = 1000.0, w_s: float = 1.0,
-                 context_smoothing: float = 0.5, dominance_tol: float = 1e-4,
-                 unknown_phone: str = "error", fit_modes: str = "selected", random_state=0, verbose: int = 0):
+    def __init__(
+        self,
+        *,
+        degree: int = 4,
+        normalize: bool = True,
+        extrapolate: str = "polynomial",
+        modes: str = "affinity",
+        n_resample: int = 20,
+        mode_preference="min",
+        min_occurrences: int = 10,
+        min_mode_size: int = 5,
+        ridge: float = 1e-6,
+        eps: float = 1e-8,
+        sigma_init="auto",
+        tol: float = 1e-3,
+        max_iter: int = 30,
+        gn_steps: int = 1,
+        w_c: float = 1000.0,
+        w_s: float = 1.0,
+        context_smoothing: float = 0.5,
+        dominance_tol: float = 1e-4,
+        unknown_phone: str = "error",
+        fit_modes: str = "selected",
+        random_state=0,
+        verbose: int = 0,
+    ):
         self.degree = degree
         self.normalize = normalize
         self.extrapolate = extrapolate
@@ -236,9 +256,17 @@ class DAM(Synthesizer):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"degree": 2, "max_iter": 3, "n_resample": 8},
-                {"degree": 1, "modes": "single", "normalize": False, "extrapolate": "hold",
-                 "max_iter": 2, "unknown_phone": "fallback"}]
+        return [
+            {"degree": 2, "max_iter": 3, "n_resample": 8},
+            {
+                "degree": 1,
+                "modes": "single",
+                "normalize": False,
+                "extrapolate": "hold",
+                "max_iter": 2,
+                "unknown_phone": "fallback",
+            },
+        ]
 
     # -- training ----------------------------------------------------------
     def _fit(self, corpus: Corpus) -> None:
@@ -262,8 +290,10 @@ class DAM(Synthesizer):
         self.time_scale_ = float(np.median(durations))
 
         # Section V-A: resample every occurrence, cluster each phone's occurrences.
-        shapes = [resample_occurrences(u.trajectory, u.frame_rate, u.alignment.starts,
-                                       u.alignment.ends, self.n_resample) for u in corpus]
+        shapes = [
+            resample_occurrences(u.trajectory, u.frame_rate, u.alignment.starts, u.alignment.ends, self.n_resample)
+            for u in corpus
+        ]
         where: dict[str, list] = {}
         for ui, u in enumerate(corpus):
             for j, p in enumerate(u.alignment.labels):
@@ -272,11 +302,16 @@ class DAM(Synthesizer):
         self.phone_modes_, self.single_mode_ = {}, {}
         mode_phone, mode_shapes, mode_counts = [], [], []
         for p in sorted(where):
-            occ = np.array([shapes[ui][j] for ui, j in where[p]])     # (n_occ, K, C)
+            occ = np.array([shapes[ui][j] for ui, j in where[p]])  # (n_occ, K, C)
             feats = (occ / self.channel_scale_).reshape(len(occ), -1)
-            res = cluster_modes(feats, method=self.modes, min_occurrences=self.min_occurrences,
-                                min_mode_size=self.min_mode_size, preference=self.mode_preference,
-                                random_state=self.random_state)
+            res = cluster_modes(
+                feats,
+                method=self.modes,
+                min_occurrences=self.min_occurrences,
+                min_mode_size=self.min_mode_size,
+                preference=self.mode_preference,
+                random_state=self.random_state,
+            )
             if res.n_modes == 1:
                 self.single_mode_[p] = res.reason
             self.phone_modes_[p] = [len(mode_phone), res.n_modes]
@@ -290,8 +325,10 @@ class DAM(Synthesizer):
         self.mode_phone_ = mode_phone
         self.mode_shapes_ = np.array(mode_shapes)
         self.mode_counts_ = np.array(mode_counts, dtype=int)
-        glob = [np.array([self.phone_modes_[p][0] + g for p, g in zip(u.alignment.labels, loc)], dtype=int)
-                for u, loc in zip(corpus, local)]
+        glob = [
+            np.array([self.phone_modes_[p][0] + g for p, g in zip(u.alignment.labels, loc)], dtype=int)
+            for u, loc in zip(corpus, local)
+        ]
         self.context_counts_ = _context_counts(corpus, local, self.phone_modes_)
         if self.fit_modes == "selected":
             # fit every occurrence with the mode synthesis will choose for its context (E_c), not
@@ -300,27 +337,52 @@ class DAM(Synthesizer):
             glob = []
             for u in corpus:
                 pid, first, count = graph.layers(u.alignment.labels)
-                glob.append(first + np.argmin(graph.node_costs(pid, count, float(self.context_smoothing))[0],
-                                              axis=1))
+                glob.append(first + np.argmin(graph.node_costs(pid, count, float(self.context_smoothing))[0], axis=1))
 
         # Sections V-B..D: EM per channel.
-        occ = Occurrences.from_corpus(corpus, glob, len(mode_phone), degree=int(self.degree),
-                                      normalize=bool(self.normalize), extrapolate=self.extrapolate,
-                                      eps=float(self.eps), tol=float(self.dominance_tol))
+        occ = Occurrences.from_corpus(
+            corpus,
+            glob,
+            len(mode_phone),
+            degree=int(self.degree),
+            normalize=bool(self.normalize),
+            extrapolate=self.extrapolate,
+            eps=float(self.eps),
+            tol=float(self.dominance_tol),
+        )
         coef, sigma, curves, n_iter, converged = fit_em(
-            occ, Y, sigma_init=self.sigma_init, ridge=self.ridge, tol=self.tol,
-            max_iter=int(self.max_iter), gn_steps=int(self.gn_steps), verbose=self.verbose,
+            occ,
+            Y,
+            sigma_init=self.sigma_init,
+            ridge=self.ridge,
+            tol=self.tol,
+            max_iter=int(self.max_iter),
+            gn_steps=int(self.gn_steps),
+            verbose=self.verbose,
             channels=list(corpus.channels),
-            weights=None if all(m is None for m in corpus.masks) else np.concatenate(
-                [np.ones(u.trajectory.shape) if u.mask is None else u.mask.astype(float) for u in corpus]))
+            weights=None
+            if all(m is None for m in corpus.masks)
+            else np.concatenate(
+                [np.ones(u.trajectory.shape) if u.mask is None else u.mask.astype(float) for u in corpus]
+            ),
+        )
         self.coef_, self.sigma_ = coef, sigma
         self.loss_curve_, self.n_iter_, self.converged_ = curves, n_iter, converged
         self._build_graph()
 
     @classmethod
-    def from_parameters(cls, phones: dict, *, frame_rate: float, channels, basis: str = "monomial",
-                        context_counts: dict | None = None, channel_scale=None, time_scale: float = 0.1,
-                        **params) -> "DAM":
+    def from_parameters(
+        cls,
+        phones: dict,
+        *,
+        frame_rate: float,
+        channels,
+        basis: str = "monomial",
+        context_counts: dict | None = None,
+        channel_scale=None,
+        time_scale: float = 0.1,
+        **params,
+    ) -> DAM:
         """A DAM with given animemes and sigmas, as if fitted (for synthetic data and teaching).
 
         Parameters
@@ -361,8 +423,7 @@ class DAM(Synthesizer):
                 coef = np.moveaxis(_animeme.monomial_to_legendre(np.moveaxis(coef, 1, 0)), 0, 1)
             elif basis != "legendre":
                 raise ValueError(f"parameter 'basis' is {basis!r}; use 'monomial' or 'legendre'")
-            sigma = np.broadcast_to(np.asarray(sigma, dtype=float).reshape(G if np.ndim(sigma) == 2 else 1, -1),
-                                    (G, C))
+            sigma = np.broadcast_to(np.asarray(sigma, dtype=float).reshape(G if np.ndim(sigma) == 2 else 1, -1), (G, C))
             phone_modes[p] = [len(mode_phone), G]
             mode_phone += [p] * G
             coefs.append(coef)
@@ -400,7 +461,7 @@ class DAM(Synthesizer):
 
     def _graph_of(self) -> ModeGraph:
         graph = self.__dict__.get("_mode_graph")
-        if graph is None:        # state set by hand (not by fit, load or from_parameters)
+        if graph is None:  # state set by hand (not by fit, load or from_parameters)
             graph = ModeGraph(self.phone_modes_, self.context_counts_)
         return graph
 
@@ -410,8 +471,10 @@ class DAM(Synthesizer):
         return (labels, *graph.layers(labels))
 
     def _edge_costs(self, graph, first, count, durations, joints) -> np.ndarray:
-        return _weighted(self.w_s, graph.edge_costs(first, count, durations, self.coef_, joints, self.time_scale_,
-                                                    self.channel_scale_))
+        return _weighted(
+            self.w_s,
+            graph.edge_costs(first, count, durations, self.coef_, joints, self.time_scale_, self.channel_scale_),
+        )
 
     def _graph(self, labels, durations):
         """Node costs ``w_c E_c`` (n_seg, G_max), edge costs ``w_s E_s`` (n_seg - 1, G_max, G_max)
@@ -433,11 +496,11 @@ class DAM(Synthesizer):
         graph = self._graph_of()
         labels, pid, first, count = self._layers(alignment, graph)
         free = count > 1
-        if not free.any():                      # nothing to choose
+        if not free.any():  # nothing to choose
             return first, first, np.zeros((len(pid), 1))
         nll, _ = graph.node_costs(pid, count, float(self.context_smoothing))
         nodes = _weighted(self.w_c, nll)
-        if len(pid) == 1:                       # one phone (e.g. streaming): its cheapest E_c
+        if len(pid) == 1:  # one phone (e.g. streaming): its cheapest E_c
             return first + np.argmin(nodes[0]), first, nodes
         # edges only where a path can differ: at the joints of multi-mode segments
         joints = np.flatnonzero(free[:-1] | free[1:])
@@ -471,8 +534,9 @@ class DAM(Synthesizer):
         cost = float(nodes[np.arange(len(glob)), glob - first].sum())
         if len(glob) > 1:
             edges, d = _animeme.boundary_derivatives(self.coef_[glob], order=2), alignment.durations
-            es = smoothness_costs(edges[:-1, 1][:, None], edges[1:, 0][:, None], d[:-1], d[1:],
-                                  self.time_scale_, self.channel_scale_)
+            es = smoothness_costs(
+                edges[:-1, 1][:, None], edges[1:, 0][:, None], d[:-1], d[1:], self.time_scale_, self.channel_scale_
+            )
             cost += float(self.w_s * es.sum())
         return glob, cost
 
@@ -505,9 +569,18 @@ class DAM(Synthesizer):
                 j = int(np.flatnonzero((modes < 0) | (modes >= counts))[0])
                 raise ValueError(f"segment {j} ({labels[j]!r}): mode {modes[j]} out of range 0..{counts[j] - 1}")
             glob = first + modes
-        return concatenate(alignment.starts, alignment.ends, self.coef_[glob], self.sigma_[glob],
-                           self.frame_rate_, n, normalize=bool(self.normalize),
-                           extrapolate=self.extrapolate, eps=float(self.eps), tol=float(self.dominance_tol))
+        return concatenate(
+            alignment.starts,
+            alignment.ends,
+            self.coef_[glob],
+            self.sigma_[glob],
+            self.frame_rate_,
+            n,
+            normalize=bool(self.normalize),
+            extrapolate=self.extrapolate,
+            eps=float(self.eps),
+            tol=float(self.dominance_tol),
+        )
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         return self.synthesize(alignment, n_frames=n_frames)
@@ -530,10 +603,14 @@ class DAM(Synthesizer):
         first, G = self.phone_modes_[phone]
         sl = slice(first, first + G)
         leg = self.coef_[sl]
-        return {"n_modes": G, "counts": self.mode_counts_[sl].copy(), "sigma": self.sigma_[sl].copy(),
-                "coef_legendre": leg.copy(),
-                "coef_monomial": np.moveaxis(_animeme.legendre_to_monomial(np.moveaxis(leg, 1, 0)), 0, 1),
-                "single_mode": self.single_mode_.get(phone, "")}
+        return {
+            "n_modes": G,
+            "counts": self.mode_counts_[sl].copy(),
+            "sigma": self.sigma_[sl].copy(),
+            "coef_legendre": leg.copy(),
+            "coef_monomial": np.moveaxis(_animeme.legendre_to_monomial(np.moveaxis(leg, 1, 0)), 0, 1),
+            "single_mode": self.single_mode_.get(phone, ""),
+        }
 
     def _mode_row(self, phone: str, mode: int) -> int:
         self._check_fitted()
@@ -550,8 +627,12 @@ class DAM(Synthesizer):
 
     def dominance_curve(self, phone: str, mode: int, t) -> np.ndarray:
         """``D(t)`` of one mode at local times ``t``, shape (len(t), n_channels)."""
-        return dominance(np.asarray(t, dtype=float)[:, None], self.sigma_[self._mode_row(phone, mode)],
-                         float(self.eps), float(self.dominance_tol))
+        return dominance(
+            np.asarray(t, dtype=float)[:, None],
+            self.sigma_[self._mode_row(phone, mode)],
+            float(self.eps),
+            float(self.dominance_tol),
+        )
 
     def explain(self, alignment: Alignment) -> list[dict]:
         """The chosen mode of every segment and what it cost.
@@ -577,9 +658,21 @@ class DAM(Synthesizer):
             es = float(ecosts[j - 1][int(local[j - 1]), g]) / self.w_s if (j and self.w_s) else 0.0
             cost = self.w_c * ec + self.w_s * es
             total += cost
-            out.append({"phone": p, "label": alignment.labels[j], "start": float(alignment.starts[j]),
-                        "end": float(alignment.ends[j]), "mode": g, "n_modes": self.phone_modes_[p][1],
-                        "context": levels[j], "E_c": ec, "E_s": es, "cost": cost, "total": total})
+            out.append(
+                {
+                    "phone": p,
+                    "label": alignment.labels[j],
+                    "start": float(alignment.starts[j]),
+                    "end": float(alignment.ends[j]),
+                    "mode": g,
+                    "n_modes": self.phone_modes_[p][1],
+                    "context": levels[j],
+                    "E_c": ec,
+                    "E_s": es,
+                    "cost": cost,
+                    "total": total,
+                }
+            )
         return out
 
 
@@ -597,8 +690,10 @@ class DAMM0(DAM):
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
-        return [{"max_iter": 3, "n_resample": 8},
-                {"modes": "single", "normalize": False, "max_iter": 2, "unknown_phone": "fallback"}]
+        return [
+            {"max_iter": 3, "n_resample": 8},
+            {"modes": "single", "normalize": False, "max_iter": 2, "unknown_phone": "fallback"},
+        ]
 
 
 class DAMPaper(DAM):
@@ -618,11 +713,11 @@ class DAMPaper(DAM):
 
 def _weighted(w: float, cost: np.ndarray) -> np.ndarray:
     """``w * cost`` with a missing mode's +inf kept +inf (also for ``w = 0``, an ablation)."""
-    with np.errstate(invalid="ignore"):       # 0 * inf, masked out by the where
+    with np.errstate(invalid="ignore"):  # 0 * inf, masked out by the where
         return np.where(np.isinf(cost), np.inf, float(w) * cost)
 
 
 def _context_counts(corpus, local, phone_modes) -> dict:
     from dam.model.astar import context_counts
-    return context_counts([u.alignment.labels for u in corpus], local,
-                          {p: G for p, (_, G) in phone_modes.items()})
+
+    return context_counts([u.alignment.labels for u in corpus], local, {p: G for p, (_, G) in phone_modes.items()})

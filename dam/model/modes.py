@@ -11,6 +11,7 @@ few occurrences, when affinity propagation does not converge, or when the
 caller asks for single modes. Clusters smaller than ``min_mode_size`` are
 merged into the nearest larger one (a mode needs data to be fitted).
 """
+
 from __future__ import annotations
 
 import warnings
@@ -21,8 +22,7 @@ import numpy as np
 __all__ = ["resample_occurrences", "cluster_modes", "ModeClustering"]
 
 
-def resample_occurrences(trajectory: np.ndarray, frame_rate: float, starts, ends,
-                         n_points: int) -> np.ndarray:
+def resample_occurrences(trajectory: np.ndarray, frame_rate: float, starts, ends, n_points: int) -> np.ndarray:
     """Each segment's trajectory resampled to ``n_points`` on its local time [0, 1].
 
     One cubic spline through all frames of the utterance is evaluated at
@@ -54,8 +54,9 @@ def resample_occurrences(trajectory: np.ndarray, frame_rate: float, starts, ends
     if traj.shape[0] == 1:
         return np.broadcast_to(traj[0], frames.shape + traj.shape[1:]).copy()
     if traj.shape[0] < 4:  # too few frames for a not-a-knot cubic: linear
-        return np.stack([np.interp(frames, np.arange(traj.shape[0]), traj[:, c])
-                         for c in range(traj.shape[1])], axis=-1)
+        return np.stack(
+            [np.interp(frames, np.arange(traj.shape[0]), traj[:, c]) for c in range(traj.shape[1])], axis=-1
+        )
     spline = CubicSpline(np.arange(traj.shape[0]), traj, axis=0)
     return spline(frames)
 
@@ -82,9 +83,17 @@ class ModeClustering:
     details: dict = field(default_factory=dict)
 
 
-def cluster_modes(features: np.ndarray, *, method: str = "affinity", min_occurrences: int = 6,
-                  min_mode_size: int = 3, preference="median", damping: float = 0.7,
-                  max_iter: int = 400, random_state=0) -> ModeClustering:
+def cluster_modes(
+    features: np.ndarray,
+    *,
+    method: str = "affinity",
+    min_occurrences: int = 6,
+    min_mode_size: int = 3,
+    preference="median",
+    damping: float = 0.7,
+    max_iter: int = 400,
+    random_state=0,
+) -> ModeClustering:
     """Cluster one phone's occurrences into modes by affinity propagation.
 
     Parameters
@@ -135,20 +144,27 @@ def cluster_modes(features: np.ndarray, *, method: str = "affinity", min_occurre
     from sklearn.cluster import AffinityPropagation
     from sklearn.exceptions import ConvergenceWarning
 
-    ap = AffinityPropagation(affinity="precomputed", preference=pref, damping=damping,
-                             max_iter=max_iter, random_state=random_state)
+    ap = AffinityPropagation(
+        affinity="precomputed", preference=pref, damping=damping, max_iter=max_iter, random_state=random_state
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
         ap.fit(S)
-    if any(issubclass(w.category, ConvergenceWarning) for w in caught) or np.any(ap.labels_ < 0) \
-            or len(ap.cluster_centers_indices_) == 0:
+    if (
+        any(issubclass(w.category, ConvergenceWarning) for w in caught)
+        or np.any(ap.labels_ < 0)
+        or len(ap.cluster_centers_indices_) == 0
+    ):
         return single(f"affinity propagation did not converge in {max_iter} iterations")
     labels = np.asarray(ap.labels_, dtype=int)
     exemplars = np.asarray(ap.cluster_centers_indices_, dtype=int)
     labels, exemplars, merged = _merge_small(labels, exemplars, d2, min_mode_size)
     if len(exemplars) == 1:
-        reason = "affinity propagation found one mode" if merged == 0 else \
-            f"all but one mode smaller than min_mode_size={min_mode_size}"
+        reason = (
+            "affinity propagation found one mode"
+            if merged == 0
+            else f"all but one mode smaller than min_mode_size={min_mode_size}"
+        )
         return ModeClustering(labels, 1, exemplars, reason, {"merged": merged})
     return ModeClustering(labels, len(exemplars), exemplars, "", {"merged": merged})
 

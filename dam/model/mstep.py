@@ -13,6 +13,7 @@ never increases. The Jacobian is analytic::
 
 Sigma is also kept within [SIGMA_MIN, SIGMA_MAX] durations.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -113,9 +114,20 @@ def _products(occ, y, cur, coef, sigma, projected, weights=None):
     return H, g, K
 
 
-def gauss_newton_sigma(occ: Occurrences, y: np.ndarray, coef: np.ndarray, sigma: np.ndarray, *,
-                       lam: float = 0.0, projected: bool = True, n_steps: int = 1, mu: float = 1e-3,
-                       rtol: float = 1e-6, max_tries: int = 8, weights=None):
+def gauss_newton_sigma(
+    occ: Occurrences,
+    y: np.ndarray,
+    coef: np.ndarray,
+    sigma: np.ndarray,
+    *,
+    lam: float = 0.0,
+    projected: bool = True,
+    n_steps: int = 1,
+    mu: float = 1e-3,
+    rtol: float = 1e-6,
+    max_tries: int = 8,
+    weights=None,
+):
     """Damped Gauss-Newton on log(sigma) for one channel.
 
     Two flavours of the same step:

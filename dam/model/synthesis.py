@@ -16,6 +16,7 @@ disagree on what the model is.
 numpy only: a saved DAM loads and synthesizes with this module, without
 scipy or scikit-learn.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -26,8 +27,7 @@ from dam.model.dominance import dominance_of_distance, outside_distance, reach
 __all__ = ["segment_windows", "concatenate"]
 
 
-def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int,
-                    eps: float = 1e-8, tol: float = 1e-4):
+def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int, eps: float = 1e-8, tol: float = 1e-4):
     """All (segment, frame) pairs where a segment's truncated dominance may be non-zero.
 
     Parameters
@@ -55,7 +55,7 @@ def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int,
     ends = np.asarray(ends, dtype=float)
     dur = ends - starts
     r = reach(sigma_max, eps, tol)
-    if tol <= 0.0:                       # no truncation: the window is the whole utterance
+    if tol <= 0.0:  # no truncation: the window is the whole utterance
         r = np.asarray(n_frames) / frame_rate / np.maximum(dur, 1e-12) + 1.0
     # (np.minimum/np.maximum rather than np.clip: cheaper per call, same values)
     lo = np.minimum(np.maximum(np.ceil((starts - r * dur) * frame_rate - 1e-9), 0), n_frames).astype(np.int64)
@@ -69,9 +69,19 @@ def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int,
     return seg, frame, t
 
 
-def concatenate(starts, ends, coef, sigma, frame_rate: float, n_frames: int, *,
-                normalize: bool = False, extrapolate: str = "polynomial",
-                eps: float = 1e-8, tol: float = 1e-4) -> np.ndarray:
+def concatenate(
+    starts,
+    ends,
+    coef,
+    sigma,
+    frame_rate: float,
+    n_frames: int,
+    *,
+    normalize: bool = False,
+    extrapolate: str = "polynomial",
+    eps: float = 1e-8,
+    tol: float = 1e-4,
+) -> np.ndarray:
     """Eq. (2): the control trajectories of a sequence of chosen animemes.
 
     Parameters
@@ -105,9 +115,9 @@ def concatenate(starts, ends, coef, sigma, frame_rate: float, n_frames: int, *,
     # by Horner's rule on the power-series coefficients (the same polynomial),
     # the dominance from u^2 per pair and sigma^2 + eps per segment
     # (x.take(seg, axis=0): much faster than x[seg] on a 2-D x).
-    power = legendre_to_monomial(coef.transpose(1, 0, 2))             # (M+1, n_seg, C)
+    power = legendre_to_monomial(coef.transpose(1, 0, 2))  # (M+1, n_seg, C)
     ta = (t if extrapolate == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0))[:, None]
-    A = power[-1].take(seg, axis=0)                                    # (pairs, C)
+    A = power[-1].take(seg, axis=0)  # (pairs, C)
     for m in range(power.shape[0] - 2, -1, -1):
         A *= ta
         A += power[m].take(seg, axis=0)

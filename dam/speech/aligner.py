@@ -16,6 +16,7 @@ model (allphone search). That is much less accurate (phone error rates of
 
 Times are multiples of 10 ms (pocketsphinx's frame step).
 """
+
 from __future__ import annotations
 
 import os
@@ -26,12 +27,20 @@ from dam.corpus import SILENCE, Alignment, DataError
 
 from .audio import ALIGN_RATE, load_audio, to_pcm16
 
-__all__ = ["align", "SpeechAlignment", "AlignmentError", "write_speech_textgrid", "onset_errors",
-           "FORCED", "PHONE_RECOGNITION"]
+__all__ = [
+    "align",
+    "SpeechAlignment",
+    "AlignmentError",
+    "write_speech_textgrid",
+    "onset_errors",
+    "FORCED",
+    "PHONE_RECOGNITION",
+]
 
 FORCED = "forced alignment (pocketsphinx 5, en-us)"
-PHONE_RECOGNITION = ("phone recognition (pocketsphinx 5, en-us; no transcript: LESS ACCURATE than "
-                     "forced alignment, phones may be wrong)")
+PHONE_RECOGNITION = (
+    "phone recognition (pocketsphinx 5, en-us; no transcript: LESS ACCURATE than forced alignment, phones may be wrong)"
+)
 _FRAME = 0.01  # pocketsphinx's frame step, seconds
 _WIDE = {"beam": 1e-200, "wbeam": 1e-200, "pbeam": 1e-200}
 
@@ -93,8 +102,9 @@ def _decode(decoder, pcm: bytes) -> None:
     decoder.end_utt()
 
 
-def align(audio, text: str | None = None, *, sample_rate: float | None = None,
-          source: str | None = None) -> SpeechAlignment:
+def align(
+    audio, text: str | None = None, *, sample_rate: float | None = None, source: str | None = None
+) -> SpeechAlignment:
     """Align English speech to its transcript (or recognize its phones).
 
     Parameters
@@ -146,6 +156,7 @@ def align(audio, text: str | None = None, *, sample_rate: float | None = None,
 
 def _force_align(pcm: bytes, text: str, duration: float, source) -> SpeechAlignment:
     from .text import PAUSE, normalize_text, pronounce
+
     words = [w for w in normalize_text(text, source=source) if w != PAUSE]
     decoder = _decoder(lm=None, bestpath=False, **_WIDE)
     guessed, n_phones = [], 0
@@ -160,8 +171,12 @@ def _force_align(pcm: bytes, text: str, duration: float, source) -> SpeechAlignm
         n_phones += len(known.split()) * words.count(w)
     n_frames = int(duration / _FRAME)
     if n_frames < 3 * n_phones:
-        raise AlignmentError(source, "audio", f"{duration:.2f} s",
-                             f"too short for the transcript ({len(words)} words); each phone needs 30 ms")
+        raise AlignmentError(
+            source,
+            "audio",
+            f"{duration:.2f} s",
+            f"too short for the transcript ({len(words)} words); each phone needs 30 ms",
+        )
     try:
         decoder.set_align_text(" ".join(words))
         _decode(decoder, pcm)
@@ -169,9 +184,13 @@ def _force_align(pcm: bytes, text: str, duration: float, source) -> SpeechAlignm
         _decode(decoder, pcm)
         al = decoder.get_alignment()
     except RuntimeError as exc:
-        raise AlignmentError(source, "transcript", " ".join(words),
-                             "pocketsphinx could not align the audio to this transcript (does the audio say "
-                             f"these words? is it speech, and not too noisy?) [{exc}]") from None
+        raise AlignmentError(
+            source,
+            "transcript",
+            " ".join(words),
+            "pocketsphinx could not align the audio to this transcript (does the audio say "
+            f"these words? is it speech, and not too noisy?) [{exc}]",
+        ) from None
     if al is None:  # pragma: no cover - pocketsphinx returns None only without set_alignment
         raise AlignmentError(source, "transcript", " ".join(words), "pocketsphinx returned no alignment")
     w_lab, w_s, w_e, p_lab, p_s, p_e = [], [], [], [], [], []
@@ -190,8 +209,9 @@ def _force_align(pcm: bytes, text: str, duration: float, source) -> SpeechAlignm
             p_e.append(_t(ph.start + ph.duration))
     got = [w for w in w_lab if w != SILENCE]
     if got != words:
-        raise AlignmentError(source, "transcript", " ".join(words),
-                             f"pocketsphinx aligned different words ({' '.join(got)})")
+        raise AlignmentError(
+            source, "transcript", " ".join(words), f"pocketsphinx aligned different words ({' '.join(got)})"
+        )
     phones = _finish(p_lab, p_s, p_e, duration, source)
     word_al = _finish(w_lab, w_s, w_e, duration, source)
     return SpeechAlignment(phones, word_al, FORCED, guessed, duration)
@@ -217,13 +237,13 @@ def _finish(labels, starts, ends, duration, source) -> Alignment:
 
 def _recognize_phones(pcm: bytes, duration: float, source) -> SpeechAlignment:
     from pocketsphinx import get_model_path
+
     lm = os.path.join(get_model_path(), "en-us", "en-us-phone.lm.bin")
     decoder = _decoder(allphone=lm, lm=None, lw=2.0, pip=0.3, beam=1e-200, pbeam=1e-20)
     _decode(decoder, pcm)
     labels, starts, ends = [], [], []
     for seg in decoder.seg():
-        lab = SILENCE if seg.word.upper() == "SIL" or seg.word.startswith("+") or seg.word.startswith("<") \
-            else seg.word
+        lab = SILENCE if seg.word.upper() == "SIL" or seg.word.startswith("+") or seg.word.startswith("<") else seg.word
         s, e = _t(seg.start_frame), _t(seg.end_frame + 1)
         if labels and labels[-1] == lab == SILENCE:
             ends[-1] = e
@@ -243,15 +263,24 @@ def write_speech_textgrid(path, phones: Alignment, words: Alignment | None = Non
     failure never leaves a partial TextGrid.
     """
     from praatio import textgrid as ptg
+
     end = phones.duration if words is None else max(phones.duration, words.duration)
     tg = ptg.Textgrid()
-    w_entries = [] if words is None else [
-        (s, e, lab) for s, e, lab in zip(words.starts.tolist(), words.ends.tolist(), words.labels)
-        if lab != words.silence]
+    w_entries = (
+        []
+        if words is None
+        else [
+            (s, e, lab)
+            for s, e, lab in zip(words.starts.tolist(), words.ends.tolist(), words.labels)
+            if lab != words.silence
+        ]
+    )
     tg.addTier(ptg.IntervalTier("words", w_entries, 0.0, end))
-    tg.addTier(ptg.IntervalTier("phones", list(zip(phones.starts.tolist(), phones.ends.tolist(),
-                                                    phones.labels)), 0.0, end))
+    tg.addTier(
+        ptg.IntervalTier("phones", list(zip(phones.starts.tolist(), phones.ends.tolist(), phones.labels)), 0.0, end)
+    )
     from dam.corpus.atomic import atomic_path
+
     with atomic_path(path) as tmp:
         tg.save(tmp, format="long_textgrid", includeBlankSpaces=True, reportingMode="silence")
 
@@ -282,14 +311,20 @@ def onset_errors(result: SpeechAlignment, words, phones) -> tuple[list[float], l
     ValueError
         The aligned words differ from the reference words.
     """
-    mine = [(w, s, e) for w, s, e in zip(result.words.labels, result.words.starts, result.words.ends)
-            if w != result.words.silence]
-    got_phones = [(s, e) for p, s, e in zip(result.phones.labels, result.phones.starts, result.phones.ends)
-                  if p != result.phones.silence]
+    mine = [
+        (w, s, e)
+        for w, s, e in zip(result.words.labels, result.words.starts, result.words.ends)
+        if w != result.words.silence
+    ]
+    got_phones = [
+        (s, e)
+        for p, s, e in zip(result.phones.labels, result.phones.starts, result.phones.ends)
+        if p != result.phones.silence
+    ]
     w_err, p_err, k = [], [], 0
     for group in words:
         names = group["words"].split()
-        part = mine[k:k + len(names)]
+        part = mine[k : k + len(names)]
         k += len(names)
         if [w for w, _, _ in part] != names:
             raise ValueError(f"aligned words {[w for w, _, _ in part]} differ from the reference {names}")

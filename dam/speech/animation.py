@@ -17,6 +17,7 @@ Without a model, the default ships in the package
 (:mod:`dam.datasets.default_model`): a DAM fitted on the bundled vtl corpus
 (German SAMPA, 19 VocalTractLab tract parameters at 100 Hz).
 """
+
 from __future__ import annotations
 
 import functools
@@ -30,8 +31,14 @@ import numpy as np
 from dam.corpus import SILENCE, Alignment, DataError
 from dam.corpus.phonetics import GERMAN_SAMPA_TO_IPA, SAMPA_TO_IPA, base_phone, guess_alphabet, map_phones
 
-__all__ = ["animate", "SpeechAnimation", "PhoneApproximationWarning", "load_default_model",
-           "load_default_durations", "model_alphabet"]
+__all__ = [
+    "animate",
+    "SpeechAnimation",
+    "PhoneApproximationWarning",
+    "load_default_model",
+    "load_default_durations",
+    "model_alphabet",
+]
 
 
 class PhoneApproximationWarning(UserWarning):
@@ -73,6 +80,7 @@ def load_default_model():
     """The default animation model shipped in the package (numpy only; a new object each call)."""
     from dam.datasets.default_model import DEFAULT_MODEL_PATH
     from dam.modelfile import load
+
     return load(DEFAULT_MODEL_PATH)
 
 
@@ -81,6 +89,7 @@ def load_default_durations():
     from dam.datasets.default_model import DEFAULT_DURATIONS_PATH
 
     from .durations import DurationModel
+
     return DurationModel.load(DEFAULT_DURATIONS_PATH)
 
 
@@ -112,6 +121,7 @@ def _resolve_model(model):
         return _shared_defaults()[0], "default (DAM on the bundled vtl corpus)"
     if isinstance(model, (str, os.PathLike)):
         from dam.modelfile import load
+
         return load(model), os.fspath(model)
     if hasattr(model, "predict") and hasattr(model, "phone_counts_"):
         return model, type(model).__name__
@@ -128,9 +138,18 @@ def _map(labels, source, target, inventory, used_for, approx: dict):
     return mapped
 
 
-def animate(*, text: str | None = None, audio=None, alignment=None, model=None, durations=None,
-            rate: float = 1.0, sample_rate: float | None = None, alphabet: str | None = None,
-            source: str | None = None) -> SpeechAnimation:
+def animate(
+    *,
+    text: str | None = None,
+    audio=None,
+    alignment=None,
+    model=None,
+    durations=None,
+    rate: float = 1.0,
+    sample_rate: float | None = None,
+    alphabet: str | None = None,
+    source: str | None = None,
+) -> SpeechAnimation:
     """Animate English text, speech audio or a phone alignment with a model.
 
     Give exactly one of ``text`` (alone), ``audio`` (with or without
@@ -184,12 +203,17 @@ def animate(*, text: str | None = None, audio=None, alignment=None, model=None, 
     ['DH', 'ER', 'CH', 'UW']
     """
     t0 = time.perf_counter()
-    given = [name for name, v in (("text", text if audio is None else None), ("audio", audio),
-                                  ("alignment", alignment)) if v is not None]
+    given = [
+        name
+        for name, v in (("text", text if audio is None else None), ("audio", audio), ("alignment", alignment))
+        if v is not None
+    ]
     if len(given) != 1 or (alignment is not None and text is not None):
-        raise ValueError("give exactly one of text=, audio= (optionally with text= as its transcript) "
-                         f"or alignment=; got {', '.join(given) or 'none'}"
-                         + (" and text" if alignment is not None and text is not None else ""))
+        raise ValueError(
+            "give exactly one of text=, audio= (optionally with text= as its transcript) "
+            f"or alignment=; got {', '.join(given) or 'none'}"
+            + (" and text" if alignment is not None and text is not None else "")
+        )
     synth, model_name = _resolve_model(model)
     if audio is not None and "audio" in getattr(synth, "reads", lambda: ())():
         return _animate_audio(synth, model_name, audio, sample_rate, source, text, t0)
@@ -201,6 +225,7 @@ def animate(*, text: str | None = None, audio=None, alignment=None, model=None, 
     stressed = None  # ARPAbet with stress digits, when known (AH0 is a schwa, AH1 is not)
     if audio is not None:
         from .aligner import align
+
         result = align(audio, text, sample_rate=sample_rate, source=source)
         phones, words, method, guessed = result.phones, result.words, result.method, result.guessed
         src_alphabet = "arpabet"
@@ -208,35 +233,52 @@ def animate(*, text: str | None = None, audio=None, alignment=None, model=None, 
     elif alignment is not None:
         if not isinstance(alignment, Alignment):
             from dam.corpus import read_alignment
+
             alignment = read_alignment(alignment)
         phones, method = alignment, "given alignment"
         labels = [p for p in alignment.labels if p != alignment.silence]
         src_alphabet = alphabet or model_alphabet(labels)
     else:
         phones, words, guessed, stressed = _text_alignment(text, durations, rate, approx, source)
-        method, src_alphabet = "text (CMU dictionary + letter-to-sound, durations from the duration model)", \
-            "arpabet"
+        method, src_alphabet = "text (CMU dictionary + letter-to-sound, durations from the duration model)", "arpabet"
     try:
         mapped = _map(stressed or list(phones.labels), src_alphabet, target, inventory, "animation", approx)
     except KeyError as exc:
-        raise DataError(phones.source or source, "phone", exc.args[0],
-                        f"not a phone of the {src_alphabet} phone set",
-                        "pass alphabet= (arpabet, ipa, xsampa, sampa, german-sampa)") from None
+        raise DataError(
+            phones.source or source,
+            "phone",
+            exc.args[0],
+            f"not a phone of the {src_alphabet} phone set",
+            "pass alphabet= (arpabet, ipa, xsampa, sampa, german-sampa)",
+        ) from None
     driven = Alignment(mapped, phones.starts, phones.ends, source=phones.source, silence=phones.silence)
     traj = np.asarray(synth.predict(driven), dtype=float)
     if not np.all(np.isfinite(traj)):  # pragma: no cover - predict() already refuses this
         raise RuntimeError("the model produced non-finite values")
     approximations = [dict(a.as_dict(), used_for=", ".join(u)) for a, u in approx.values()]
     if approximations:
-        warnings.warn("phones approximated for the model's phone set (" + target + "): "
-                      + "; ".join(f"{a['phone']} -> {a['replacement']} ({a['used_for']})" for a in approximations),
-                      PhoneApproximationWarning, stacklevel=2)
-    meta = {"source": given[0] if audio is None else ("audio+text" if text is not None else "audio"),
-            "method": method, "model": model_name, "model_alphabet": target, "input_alphabet": src_alphabet,
-            "phones": [base_phone(p) if src_alphabet == "arpabet" else p for p in phones.labels],
-            "model_phones": list(driven.labels), "approximations": approximations,
-            "guessed_words": guessed, "rate": rate, "duration": float(phones.duration),
-            "seconds": time.perf_counter() - t0}
+        warnings.warn(
+            "phones approximated for the model's phone set ("
+            + target
+            + "): "
+            + "; ".join(f"{a['phone']} -> {a['replacement']} ({a['used_for']})" for a in approximations),
+            PhoneApproximationWarning,
+            stacklevel=2,
+        )
+    meta = {
+        "source": given[0] if audio is None else ("audio+text" if text is not None else "audio"),
+        "method": method,
+        "model": model_name,
+        "model_alphabet": target,
+        "input_alphabet": src_alphabet,
+        "phones": [base_phone(p) if src_alphabet == "arpabet" else p for p in phones.labels],
+        "model_phones": list(driven.labels),
+        "approximations": approximations,
+        "guessed_words": guessed,
+        "rate": rate,
+        "duration": float(phones.duration),
+        "seconds": time.perf_counter() - t0,
+    }
     return SpeechAnimation(traj, list(synth.channels_), float(synth.frame_rate_), driven, phones, words, meta)
 
 
@@ -245,16 +287,27 @@ def _animate_audio(synth, model_name, audio, sample_rate, source, text, t0) -> S
     from dam.corpus import AudioClip
 
     from .audio import load_audio
+
     x, src = load_audio(audio, sample_rate, rate=16000, source=source)
     clip = AudioClip(x, 16000, name=src)
     traj = np.asarray(synth.predict(clip), dtype=float)
     # No phones are known: the animation's alignment is one silence-labelled span of the audio.
     span = Alignment([SILENCE], [0.0], [clip.duration], source=src)
-    meta = {"source": "audio", "method": "audio-driven model (reads the audio; no alignment"
-            + (", the transcript is not used)" if text is not None else ")"),
-            "model": model_name, "model_alphabet": "", "input_alphabet": "", "phones": [], "model_phones": [],
-            "approximations": [], "guessed_words": [], "rate": 1.0, "duration": clip.duration,
-            "seconds": time.perf_counter() - t0}
+    meta = {
+        "source": "audio",
+        "method": "audio-driven model (reads the audio; no alignment"
+        + (", the transcript is not used)" if text is not None else ")"),
+        "model": model_name,
+        "model_alphabet": "",
+        "input_alphabet": "",
+        "phones": [],
+        "model_phones": [],
+        "approximations": [],
+        "guessed_words": [],
+        "rate": 1.0,
+        "duration": clip.duration,
+        "seconds": time.perf_counter() - t0,
+    }
     return SpeechAnimation(traj, list(synth.channels_), float(synth.frame_rate_), span, span, None, meta)
 
 
@@ -268,12 +321,16 @@ def _dictionary_stress(phones: Alignment, words: Alignment | None) -> list[str] 
     if words is None:
         return None
     from .text import cmu_lookup
+
     out = list(phones.labels)
     for w, ws, we in zip(words.labels, words.starts, words.ends):
         if w == words.silence:
             continue
-        idx = [k for k, (s, e) in enumerate(zip(phones.starts, phones.ends))
-               if s >= ws - 1e-9 and e <= we + 1e-9 and phones.labels[k] != phones.silence]
+        idx = [
+            k
+            for k, (s, e) in enumerate(zip(phones.starts, phones.ends))
+            if s >= ws - 1e-9 and e <= we + 1e-9 and phones.labels[k] != phones.silence
+        ]
         bare = [phones.labels[k] for k in idx]
         for pron in cmu_lookup(w):
             if [base_phone(p) for p in pron] == bare:
@@ -287,6 +344,7 @@ def _text_alignment(text, durations, rate, approx, source):
     """Phones with predicted durations for English text: (phones, words, guessed, stressed labels)."""
     from .durations import DurationModel
     from .text import PAUSE, text_to_phones
+
     if durations is None:
         durations = _shared_defaults()[1]
     elif isinstance(durations, (str, os.PathLike)):
@@ -321,4 +379,3 @@ def _text_alignment(text, durations, rate, approx, source):
             w_e.append(ends[idx[-1]])
     words = Alignment(w_lab, w_s, w_e, source=source or "<text>") if w_lab else None
     return phones, words, list(pron.guessed), labels
-

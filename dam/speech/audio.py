@@ -1,4 +1,5 @@
 """Reading audio for the aligner: any common rate and bit depth in, 16 kHz mono out."""
+
 from __future__ import annotations
 
 import math
@@ -14,8 +15,9 @@ __all__ = ["load_audio", "to_pcm16", "ALIGN_RATE"]
 ALIGN_RATE = 16000
 
 
-def load_audio(audio, sample_rate: float | None = None, *, rate: int = ALIGN_RATE,
-               source=None) -> tuple[np.ndarray, str]:
+def load_audio(
+    audio, sample_rate: float | None = None, *, rate: int = ALIGN_RATE, source=None
+) -> tuple[np.ndarray, str]:
     """Audio as mono float64 in [-1, 1] at ``rate`` Hz.
 
     Parameters
@@ -43,6 +45,7 @@ def load_audio(audio, sample_rate: float | None = None, *, rate: int = ALIGN_RAT
         Unreadable file, no samples, non-finite samples, bad rate.
     """
     from scipy.signal import resample_poly
+
     if isinstance(audio, (str, os.PathLike)):
         source = source or os.fspath(audio)
         try:
@@ -54,8 +57,9 @@ def load_audio(audio, sample_rate: float | None = None, *, rate: int = ALIGN_RAT
         try:
             x, sr = soundfile.read(os.fspath(audio), dtype="float64", always_2d=True)
         except Exception as exc:  # libsndfile's own errors: say what failed
-            raise DataError(source, "audio", os.path.basename(os.fspath(audio)),
-                            f"not a readable sound file ({exc})") from None
+            raise DataError(
+                source, "audio", os.path.basename(os.fspath(audio)), f"not a readable sound file ({exc})"
+            ) from None
     else:
         source = source or "<audio array>"
         if sample_rate is None:
@@ -63,8 +67,9 @@ def load_audio(audio, sample_rate: float | None = None, *, rate: int = ALIGN_RAT
         x = np.asarray(audio)
         if np.issubdtype(x.dtype, np.integer):
             info = np.iinfo(x.dtype)
-            x = (x.astype(np.float64) - (info.max + info.min + 1) / 2) / (-(info.min) if info.min < 0 else
-                                                                            (info.max + 1) / 2)
+            x = (x.astype(np.float64) - (info.max + info.min + 1) / 2) / (
+                -(info.min) if info.min < 0 else (info.max + 1) / 2
+            )
         x = np.asarray(x, dtype=np.float64)
         if x.ndim == 1:
             x = x[:, None]
@@ -89,6 +94,7 @@ def _ratio(sr: float, rate: int) -> tuple[int, int]:
         g = math.gcd(int(sr), rate)
         return rate // g, int(sr) // g
     from fractions import Fraction
+
     f = Fraction(rate / sr).limit_denominator(1000)
     return f.numerator, f.denominator
 

@@ -18,6 +18,7 @@ log-normal mean correction ``exp(sigma^2 / 2)`` so predictions are means in
 seconds. ``rate`` divides every duration (``rate=1.2``: 20% faster speech).
 Saved in the toolkit's model-file format (``dam.modelfile``), numpy only.
 """
+
 from __future__ import annotations
 
 import re
@@ -43,8 +44,7 @@ def _cls(label: str, silence: str, alphabet: str | None) -> str:
     return phone_class(label, alphabet) or "other"
 
 
-def context_features(labels, word_ids=None, *, silence: str = SILENCE,
-                     alphabet: str | None = None) -> list[list[str]]:
+def context_features(labels, word_ids=None, *, silence: str = SILENCE, alphabet: str | None = None) -> list[list[str]]:
     """The categorical features of each phone of an utterance.
 
     Parameters
@@ -113,9 +113,14 @@ def context_features(labels, word_ids=None, *, silence: str = SILENCE,
             last = k == n - 1 or labels[k + 1] == silence or word_ids[k + 1] != w
             wpos = "single" if first and last else "initial" if first else "final" if last else "medial"
         ph = base_phone(lab)
-        f = [f"phone={ph}", f"left={left}", f"right={right}", f"word={wpos}",
-             "phrase=final_word" if final_word[k] else "phrase=initial_word" if initial_word[k] else "phrase=medial",
-             f"stress={_stress(lab)}"]
+        f = [
+            f"phone={ph}",
+            f"left={left}",
+            f"right={right}",
+            f"word={wpos}",
+            "phrase=final_word" if final_word[k] else "phrase=initial_word" if initial_word[k] else "phrase=medial",
+            f"stress={_stress(lab)}",
+        ]
         if final_word[k] and _cls(lab, silence, alphabet).endswith("vowel"):
             f.append("final_vowel=1")
         feats.append(f)
@@ -208,7 +213,7 @@ class DurationModel:
             for f, d in zip(context_features(labels, wid, silence=silence, alphabet=alphabet), dur):
                 rows.append(f)
                 y.append(np.log(d))
-                phones.append(f[0][len("phone="):])
+                phones.append(f[0][len("phone=") :])
         if not rows:
             raise DataError(None, "data", 0, "no phones to fit durations on")
         counts: dict[str, int] = {}
@@ -242,6 +247,7 @@ class DurationModel:
     def _check_fitted(self):
         if not hasattr(self, "coef_"):
             from dam.base import NotFittedError
+
             raise NotFittedError("this DurationModel is not fitted yet; call fit(corpus) first")
 
     def effect(self, feature: str) -> float:
@@ -274,8 +280,9 @@ class DurationModel:
             out[r] = self.intercept_ + sum(self.coef_[index[name]] for name in f if name in index)
         return np.exp(out + self.sigma2_ / 2) / rate
 
-    def predict_alignment(self, labels, word_ids=None, *, rate: float = 1.0, start: float = 0.0,
-                          silence: str = SILENCE, source=None) -> Alignment:
+    def predict_alignment(
+        self, labels, word_ids=None, *, rate: float = 1.0, start: float = 0.0, silence: str = SILENCE, source=None
+    ) -> Alignment:
         """An :class:`~dam.Alignment` with predicted durations, starting at ``start`` seconds."""
         d = self.predict(labels, word_ids, rate=rate, silence=silence)
         ends = start + np.cumsum(d)
@@ -283,8 +290,14 @@ class DurationModel:
 
     # -- the model file format ----------------------------------------------
     def _get_state(self) -> dict:
-        return {"alphabet_": self.alphabet_, "features_": list(self.features_), "coef_": np.asarray(self.coef_),
-                "intercept_": self.intercept_, "sigma2_": self.sigma2_, "phone_means_": dict(self.phone_means_)}
+        return {
+            "alphabet_": self.alphabet_,
+            "features_": list(self.features_),
+            "coef_": np.asarray(self.coef_),
+            "intercept_": self.intercept_,
+            "sigma2_": self.sigma2_,
+            "phone_means_": dict(self.phone_means_),
+        }
 
     def _set_state(self, state: dict) -> None:
         for k, v in state.items():
@@ -293,6 +306,7 @@ class DurationModel:
     def save(self, path) -> None:
         """Write the fitted model (npz + JSON, see :mod:`dam.modelfile`); atomic."""
         from dam.modelfile import write_model_file
+
         self._check_fitted()
         write_model_file(self, path)  # atomic (dam.corpus.atomic)
 
@@ -306,10 +320,12 @@ class DurationModel:
             Missing, corrupt or foreign file, or a model that is not a duration model.
         """
         from dam.modelfile import ModelFileError, _decode, check_state, read_model_file
+
         meta, arrays = read_model_file(path)
         if meta["model"] != cls.name:
-            raise ModelFileError(f"{path}: field 'model' is {meta['model']!r}, expected {cls.name!r} "
-                                 "(a duration model)")
+            raise ModelFileError(
+                f"{path}: field 'model' is {meta['model']!r}, expected {cls.name!r} (a duration model)"
+            )
         try:
             state = _decode(meta["state"], arrays)
             check_state(cls, state, path)  # learned-attribute names only (dam.modelfile)
@@ -334,5 +350,6 @@ def phone_mean_baseline(train, test) -> np.ndarray:
             sums.setdefault(base_phone(lab), []).append(float(d))
     means = {p: float(np.mean(v)) for p, v in sums.items()}
     overall = float(np.mean([d for v in sums.values() for d in v]))
-    return np.array([means.get(base_phone(lab), overall) for labels, _, _, _ in _examples(test, None, SILENCE)
-                     for lab in labels])
+    return np.array(
+        [means.get(base_phone(lab), overall) for labels, _, _, _ in _examples(test, None, SILENCE) for lab in labels]
+    )

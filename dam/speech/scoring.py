@@ -1,4 +1,5 @@
 """Comparing phone sequences: edit distance and phone error rate."""
+
 from __future__ import annotations
 
 __all__ = ["edit_distance", "phone_error_rate"]

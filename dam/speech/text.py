@@ -11,6 +11,7 @@
    falls back to :func:`dam.speech.lts.letter_to_sound` for words it lacks,
    recording which words were guessed.
 """
+
 from __future__ import annotations
 
 import functools
@@ -24,12 +25,21 @@ __all__ = ["normalize_text", "number_to_words", "text_to_phones", "Pronunciation
 #: The word-list token for a phrase break.
 PAUSE = "<pause>"
 
-_ONES = ("zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen "
-         "sixteen seventeen eighteen nineteen").split()
+_ONES = (
+    "zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen "
+    "sixteen seventeen eighteen nineteen"
+).split()
 _TENS = "_ _ twenty thirty forty fifty sixty seventy eighty ninety".split()
-_SCALES = [(10 ** 12, "trillion"), (10 ** 9, "billion"), (10 ** 6, "million"), (1000, "thousand")]
-_ORD = {"one": "first", "two": "second", "three": "third", "five": "fifth", "eight": "eighth",
-        "nine": "ninth", "twelve": "twelfth"}
+_SCALES = [(10**12, "trillion"), (10**9, "billion"), (10**6, "million"), (1000, "thousand")]
+_ORD = {
+    "one": "first",
+    "two": "second",
+    "three": "third",
+    "five": "fifth",
+    "eight": "eighth",
+    "nine": "ninth",
+    "twelve": "twelfth",
+}
 
 
 def _below_1000(n: int) -> list[str]:
@@ -65,7 +75,7 @@ def number_to_words(n: int, *, ordinal: bool = False, year: bool = False) -> lis
     >>> " ".join(number_to_words(1999, year=True)), " ".join(number_to_words(21, ordinal=True))
     ('nineteen ninety nine', 'twenty first')
     """
-    if n < 0 or n >= 10 ** 15:
+    if n < 0 or n >= 10**15:
         raise ValueError(f"number {n} out of range")
     if year and (1100 <= n <= 1999 or 2010 <= n <= 2099) and n % 100 != 0:
         hi, lo = divmod(n, 100)
@@ -91,7 +101,8 @@ def number_to_words(n: int, *, ordinal: bool = False, year: bool = False) -> lis
     return words
 
 
-_TOKEN = re.compile(r"""
+_TOKEN = re.compile(
+    r"""
     (?P<money>[$£€]\d[\d,]*(?:\.\d+)?)
   | (?P<ordinal>\d+(?:st|nd|rd|th)\b)
   | (?P<number>\d[\d,]*(?:\.\d+)?%?)
@@ -101,7 +112,9 @@ _TOKEN = re.compile(r"""
   | (?P<drop>["“”‘’'`\-/*_~])
   | (?P<space>\s+)
   | (?P<other>\S)
-""", re.VERBOSE)
+""",
+    re.VERBOSE,
+)
 _CURRENCY = {"$": ("dollar", "dollars"), "£": ("pound", "pounds"), "€": ("euro", "euros")}
 
 
@@ -171,9 +184,8 @@ def normalize_text(text: str, *, source=None) -> list[str]:
             # the whole white-space delimited token, so the user sees what to fix
             start = text.rfind(" ", 0, m.start()) + 1
             end = text.find(" ", m.end())
-            whole = text[start:end if end >= 0 else len(text)]
-            raise DataError(source, "text", whole,
-                            f"cannot read the character {tok!r} aloud; spell it out in words")
+            whole = text[start : end if end >= 0 else len(text)]
+            raise DataError(source, "text", whole, f"cannot read the character {tok!r} aloud; spell it out in words")
     words: list[str] = []
     for w in out:
         if w == PAUSE and (not words or words[-1] == PAUSE):
@@ -243,6 +255,7 @@ class Pronunciation:
 def pronounce(word: str) -> tuple[list[str], bool]:
     """ARPAbet (with stress) of one normalized word and whether it was guessed by rule."""
     from .lts import letter_to_sound
+
     prons = cmu_lookup(word)
     if not prons and "'" in word:
         prons = cmu_lookup(word.replace("'", ""))

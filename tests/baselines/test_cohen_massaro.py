@@ -1,9 +1,16 @@
 """Cohen–Massaro (1993): exact Jacobian, and recovery of known parameters."""
+
 import numpy as np
 import pytest
 
-from baselines.cohen_massaro import (BLOCKS, CohenMassaro, _Design, cohen_massaro_trajectory, dominance,
-                                     residuals_and_jacobian)
+from baselines.cohen_massaro import (
+    BLOCKS,
+    CohenMassaro,
+    _Design,
+    cohen_massaro_trajectory,
+    dominance,
+    residuals_and_jacobian,
+)
 from dam.corpus.data import Alignment, Corpus, Utterance
 
 PHONES = ["aa", "m", "s", "sil"]  # sorted, the order of phones_
@@ -33,9 +40,20 @@ def _generated_corpus(n_utts=16, seed=0, frame_rate=100.0):
         a = _random_alignment(rng)
         n = a.n_frames(frame_rate)
         d = _Design(a, np.array([PHONES.index(lab) for lab in a.labels]), frame_rate, n)
-        y = np.stack([cohen_massaro_trajectory(d, TRUE["target"][:, ch], np.log(TRUE["alpha"][:, ch]),
-                                               TRUE["theta_left"][:, ch], TRUE["theta_right"][:, ch],
-                                               TRUE["c"][:, ch]) for ch in range(2)], axis=1)
+        y = np.stack(
+            [
+                cohen_massaro_trajectory(
+                    d,
+                    TRUE["target"][:, ch],
+                    np.log(TRUE["alpha"][:, ch]),
+                    TRUE["theta_left"][:, ch],
+                    TRUE["theta_right"][:, ch],
+                    TRUE["c"][:, ch],
+                )
+                for ch in range(2)
+            ],
+            axis=1,
+        )
         utts.append(Utterance(a, y, frame_rate, ["x", "y"], name=f"u{k}"))
     return Corpus(utts, name="cm-generated")
 
@@ -64,20 +82,23 @@ def test_trajectory_is_weighted_average_of_targets():
 def test_jacobian_matches_finite_differences():
     corpus = _generated_corpus(n_utts=3, seed=1)
     idx = {p: i for i, p in enumerate(PHONES)}
-    designs = [_Design(u.alignment, np.array([idx[lab] for lab in u.alignment.labels]), 100.0, u.n_frames)
-               for u in corpus]
+    designs = [
+        _Design(u.alignment, np.array([idx[lab] for lab in u.alignment.labels]), 100.0, u.n_frames) for u in corpus
+    ]
     ys = [u.trajectory[:, 0] + 0.1 for u in corpus]
     rng = np.random.default_rng(3)
-    x = np.concatenate([rng.normal(size=4), rng.normal(0, 0.3, 4), np.log(rng.uniform(5, 30, 8)),
-                        np.log(rng.uniform(0.7, 1.5, 4))])
+    x = np.concatenate(
+        [rng.normal(size=4), rng.normal(0, 0.3, 4), np.log(rng.uniform(5, 30, 8)), np.log(rng.uniform(0.7, 1.5, 4))]
+    )
     _, J = residuals_and_jacobian(x, designs, ys, 4)
     h = 1e-6
     num = np.empty_like(J)
     for j in range(len(x)):
         e = np.zeros_like(x)
         e[j] = h
-        num[:, j] = (residuals_and_jacobian(x + e, designs, ys, 4)[0]
-                     - residuals_and_jacobian(x - e, designs, ys, 4)[0]) / (2 * h)
+        num[:, j] = (
+            residuals_and_jacobian(x + e, designs, ys, 4)[0] - residuals_and_jacobian(x - e, designs, ys, 4)[0]
+        ) / (2 * h)
     assert len(x) == len(BLOCKS) * 4
     np.testing.assert_allclose(J, num, atol=1e-7 * np.abs(num).max() + 1e-9, rtol=1e-5)
 
@@ -117,10 +138,12 @@ def test_fit_rate_thins_the_fitted_frames_without_bias():
 
 def test_normal_equations_equal_dense_products():
     from baselines.cohen_massaro import normal_equations
+
     corpus = _generated_corpus(n_utts=3, seed=5)
     idx = {p: i for i, p in enumerate(PHONES)}
-    designs = [_Design(u.alignment, np.array([idx[lab] for lab in u.alignment.labels]), 100.0, u.n_frames)
-               for u in corpus]
+    designs = [
+        _Design(u.alignment, np.array([idx[lab] for lab in u.alignment.labels]), 100.0, u.n_frames) for u in corpus
+    ]
     ys = [u.trajectory[:, 1] for u in corpus]
     x = np.random.default_rng(0).normal(0, 0.5, size=20)
     r, J = residuals_and_jacobian(x, designs, ys, 4)
@@ -132,7 +155,9 @@ def test_normal_equations_equal_dense_products():
 
 def test_levenberg_marquardt_matches_scipy_on_a_bounded_problem():
     from scipy.optimize import least_squares
+
     from baselines.cohen_massaro import levenberg_marquardt
+
     t = np.linspace(0, 3, 40)
     y = 2.0 * np.exp(-1.3 * t) + 0.5
 
@@ -157,6 +182,7 @@ def test_levenberg_marquardt_matches_scipy_on_a_bounded_problem():
 
 def test_long_recordings_are_synthesised_in_blocks_identically(monkeypatch):
     import baselines.cohen_massaro as cm
+
     model = CohenMassaro(max_nfev=5).fit(_generated_corpus(n_utts=3))
     a = _generated_corpus(n_utts=1, seed=4)[0].alignment
     whole = model.predict(a)
@@ -168,19 +194,20 @@ def test_long_utterance_in_windowed_blocks_matches_the_dense_model(monkeypatch):
     """Linear memory: blocks of frames see only nearby segments; the dense (frames x all segments)
     weighted average, with every segment, gives the same trajectory."""
     import baselines.cohen_massaro as cm
+
     model = CohenMassaro(max_nfev=5).fit(_generated_corpus(n_utts=3))
     parts = [u.alignment for u in _generated_corpus(n_utts=12, seed=5)]
     labels, starts, ends, t = [], [], [], 0.0
-    for a in parts:                                  # one long utterance of ~12 phrases
+    for a in parts:  # one long utterance of ~12 phrases
         labels += list(a.labels)
         starts += list(a.starts + t)
         ends += list(a.ends + t)
         t += a.duration
     long = Alignment(labels, starts, ends)
     windowed = model.predict(long)
-    monkeypatch.setattr(cm, "BLOCK_FRAMES", 10 ** 9)
-    monkeypatch.setattr(cm, "NEIGHBOURS", 10 ** 9)
+    monkeypatch.setattr(cm, "BLOCK_FRAMES", 10**9)
+    monkeypatch.setattr(cm, "NEIGHBOURS", 10**9)
     dense = model.predict(long)
-    assert len(long) > 60                       # many more segments than one block sees
+    assert len(long) > 60  # many more segments than one block sees
     err = np.abs(windowed - dense).max() / np.ptp(dense, axis=0).max()
     assert err < 1e-4, err

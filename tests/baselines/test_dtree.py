@@ -1,4 +1,5 @@
 """Sliding-window decision tree (Kim et al. 2015): window averaging, array round trip, features."""
+
 import numpy as np
 import pytest
 
@@ -29,6 +30,7 @@ def test_window_averaging_equals_hand_computation():
 @pytest.mark.parametrize("features", ["raw", "linguistic"])
 def test_tree_arrays_predict_like_sklearn_after_save_load(features, tmp_path):
     from dam.testing import default_corpora
+
     train, test = default_corpora()
     model = DecisionTree(features=features, kx=7, ky=3, max_depth=10).fit(train)
     path = tmp_path / "dtree.dam"
@@ -38,12 +40,14 @@ def test_tree_arrays_predict_like_sklearn_after_save_load(features, tmp_path):
         X = model._features(a, a.n_frames(model.frame_rate_))
         sk = model._sklearn_tree.predict(X)
         np.testing.assert_array_equal(predict_tree_arrays(back.tree_, X), sk)
-        np.testing.assert_array_equal(back.predict(a), overlap_average(sk, 3, train.n_channels,
-                                                                        dilation=model.dilation_))
+        np.testing.assert_array_equal(
+            back.predict(a), overlap_average(sk, 3, train.n_channels, dilation=model.dilation_)
+        )
 
 
 def test_tree_to_arrays_on_a_hand_made_split():
     from sklearn.tree import DecisionTreeRegressor
+
     X = np.array([[0.0], [1.0], [2.0], [3.0]])
     y = np.array([[1.0, 10.0], [1.0, 10.0], [5.0, 50.0], [5.0, 50.0]])
     arr = tree_to_arrays(DecisionTreeRegressor(max_depth=1).fit(X, y).tree_)

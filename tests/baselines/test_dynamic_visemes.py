@@ -1,4 +1,5 @@
 """Dynamic visemes: gesture units cut from data built of known gestures are found and clustered back."""
+
 import numpy as np
 import pytest
 from sklearn.metrics import adjusted_rand_score
@@ -43,8 +44,15 @@ def _gesture_corpus(n_utts=12, seed=0):
             bounds.append(t)
             pose = nxt
         y = np.concatenate(frames)
-        utts.append(dam.Utterance(dam.Alignment(labels, np.array(starts) / FR, np.array(ends) / FR), y, FR,
-                                  channels=("x", "y"), name=f"g{i}"))
+        utts.append(
+            dam.Utterance(
+                dam.Alignment(labels, np.array(starts) / FR, np.array(ends) / FR),
+                y,
+                FR,
+                channels=("x", "y"),
+                name=f"g{i}",
+            )
+        )
         truth.append((np.array(bounds[:-1]), types))
     return dam.Corpus(utts), truth
 
@@ -73,7 +81,7 @@ def test_units_are_clustered_back_to_their_gestures():
 
 
 def test_gesture_units_snap_to_phone_boundaries_and_cover_every_phone():
-    a = dam.Alignment(["a", "b", "c", "d", "e", "f"], [0, .1, .2, .3, .4, .5], [.1, .2, .3, .4, .5, .6])
+    a = dam.Alignment(["a", "b", "c", "d", "e", "f"], [0, 0.1, 0.2, 0.3, 0.4, 0.5], [0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
     units = gesture_units([19, 31], a, FR, max_phones=2)
     # cuts at frames 19 and 31 go to the boundaries at 0.2 s and 0.3 s; the last 3 phones are split in two
     assert units == [(0, 2), (2, 3), (3, 4), (4, 6)] or units == [(0, 2), (2, 3), (3, 5), (5, 6)]

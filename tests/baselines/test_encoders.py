@@ -1,6 +1,7 @@
 """The audio encoders of the neural synthesizers (issue 15): MFCC / log-mel against a hand
 computation, frame alignment, refusal of corpora without audio, user-supplied features,
 learning from audio, and audio-driven rows in ``compare``."""
+
 import numpy as np
 import pytest
 from scipy.io import wavfile
@@ -51,8 +52,9 @@ def _hand_mfcc(x, sr, t, *, window, n_mels, n_mfcc, preemphasis):
     return np.array(out), logE
 
 
-@pytest.mark.parametrize("f0,frame_rate,n_mfcc,window", [(1000.0, 100.0, 13, 0.025), (440.0, 50.0, 27, 0.02),
-                                                          (3100.0, 100.0, 20, 0.032)])
+@pytest.mark.parametrize(
+    "f0,frame_rate,n_mfcc,window", [(1000.0, 100.0, 13, 0.025), (440.0, 50.0, 27, 0.02), (3100.0, 100.0, 20, 0.032)]
+)
 def test_mfcc_matches_hand_computation_on_a_pure_tone(f0, frame_rate, n_mfcc, window):
     """Agreement to 1e-8 (absolute, float64) with the definition computed term by term."""
     t = np.arange(SR) / SR
@@ -122,8 +124,9 @@ def test_encoder_options_are_parameters(tones):
     enc = make_encoder("mfcc:n_mfcc=27,window=0.02", train)
     assert enc.n_features == 27
     back = encoder_from_state(enc.state())
-    np.testing.assert_array_equal(back.frames(train[0], 100.0, train[0].n_frames),
-                                  enc.frames(train[0], 100.0, train[0].n_frames))
+    np.testing.assert_array_equal(
+        back.frames(train[0], 100.0, train[0].n_frames), enc.frames(train[0], 100.0, train[0].n_frames)
+    )
     with pytest.raises(dam.InvalidParameterError, match="encoder"):
         dam.registry.make("gru", encoder="mfcc:not_an_option=1", verbose=0).fit(train)
     with pytest.raises(dam.InvalidParameterError, match="encoder"):
@@ -146,43 +149,67 @@ def test_features_encoder_reads_user_features_beside_each_utterance(tmp_path):
         make_encoder("features", dam.load_corpus(tmp_path / "c"))
 
 
-@pytest.mark.parametrize("name,params", [
-    ("gru", {"n_layers": 1, "hidden_size": 32, "seq_len": 64, "learning_rate": 1e-2}),
-    ("causal-mlp", {"hidden_layer_sizes": (64,), "learning_rate": 3e-3, "batch_size": 64}),
-    ("transformer", {"window": 9, "n_layers": 1, "n_heads": 2, "d_model": 32, "d_ff": 64, "window_hop": 1,
-                     "learning_rate": 5e-3, "max_epochs": 150}),
-])
+@pytest.mark.parametrize(
+    "name,params",
+    [
+        ("gru", {"n_layers": 1, "hidden_size": 32, "seq_len": 64, "learning_rate": 1e-2}),
+        ("causal-mlp", {"hidden_layer_sizes": (64,), "learning_rate": 3e-3, "batch_size": 64}),
+        (
+            "transformer",
+            {
+                "window": 9,
+                "n_layers": 1,
+                "n_heads": 2,
+                "d_model": 32,
+                "d_ff": 64,
+                "window_hop": 1,
+                "learning_rate": 5e-3,
+                "max_epochs": 150,
+            },
+        ),
+    ],
+)
 def test_medina_decoders_learn_a_small_audio_corpus_from_mfcc(tones, name, params):
     """Training loss (standardized MSE) falls by 90% on 8 utterances of toy audio."""
     train, _ = tones
     small = train.subset(range(8))
-    m = dam.registry.make(name, **{"encoder": "mfcc", "dropout": 0.0, "max_epochs": 80, "validation_fraction": 0.0,
-                                   "verbose": 0, **params}).fit(small)
+    m = dam.registry.make(
+        name,
+        **{"encoder": "mfcc", "dropout": 0.0, "max_epochs": 80, "validation_fraction": 0.0, "verbose": 0, **params},
+    ).fit(small)
     assert m.loss_curve_[-1] <= 0.1 * m.initial_loss_, (m.initial_loss_, m.loss_curve_[-1])
 
 
 def test_mfcc_model_saves_loads_and_predicts_from_audio_alone(tones, tmp_path):
     train, test = tones
-    m = dam.registry.make("gru", encoder="mfcc:n_mfcc=20", n_layers=1, hidden_size=8, max_epochs=2,
-                          verbose=0).fit(train)
+    m = dam.registry.make("gru", encoder="mfcc:n_mfcc=20", n_layers=1, hidden_size=8, max_epochs=2, verbose=0).fit(
+        train
+    )
     m.save(tmp_path / "m.dam")
     back = dam.load(tmp_path / "m.dam")
     u = test[0]
     np.testing.assert_allclose(back.predict(u), m.predict(u), rtol=1e-6, atol=1e-9)
     # no transcript: the audio file alone gives the same frames (the utterance's count)
     alone = back.predict_audio(u.audio)
-    np.testing.assert_allclose(alone[:u.n_frames], m.predict(u), rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(alone[: u.n_frames], m.predict(u), rtol=1e-5, atol=1e-6)
     assert abs(len(alone) - u.n_frames) <= 1
 
 
 def test_compare_puts_audio_rows_beside_phone_rows(tones, capsys):
     """Phone-driven and audio-driven models in one table; every row on the utterances with audio."""
     from dam.evaluation.compare import compare
+
     train, test = tones
     no_audio = [u.replace(audio=None) for u in train[:3]]
     mixed = dam.Corpus(no_audio + list(train[3:]), name="mixed")
-    res = compare(["phone-mean", ("gru-mfcc", "gru", {"encoder": "mfcc", "n_layers": 1, "hidden_size": 8,
-                                                      "max_epochs": 3, "verbose": 0})], mixed, test)
+    res = compare(
+        [
+            "phone-mean",
+            ("gru-mfcc", "gru", {"encoder": "mfcc", "n_layers": 1, "hidden_size": 8, "max_epochs": 3, "verbose": 0}),
+        ],
+        mixed,
+        test,
+    )
     assert {r.model for r in res.summary} == {"phone-mean", "gru-mfcc"}
     assert all(r.status == "ok" for r in res.summary), [(r.model, r.status, r.reason) for r in res.summary]
     assert res.row("gru-mfcc").rmse > 0 and "gru-mfcc" in res.table()
@@ -194,6 +221,7 @@ def test_dam_animate_audio_uses_an_audio_model_without_transcript(tones, tmp_pat
     """`dam animate --audio` with an audio-driven model: no alignment, no phone recognition; the CSV
     holds the model's prediction from the audio alone."""
     from dam.cli import main
+
     train, test = tones
     m = dam.registry.make("causal-mlp", encoder="mfcc", hidden_layer_sizes=(8,), max_epochs=2, verbose=0).fit(train)
     m.save(tmp_path / "m.dam")

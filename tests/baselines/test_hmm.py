@@ -1,4 +1,5 @@
 """HMM synthesis: MLPG against the dense closed form, EM against a known generating HMM, tree tying."""
+
 import itertools
 
 import numpy as np
@@ -68,7 +69,7 @@ def test_numpy_banded_solver_equals_dense_solve():
 def test_dynamic_features_are_the_window_matrix_rows():
     x = np.random.default_rng(1).normal(size=(7, 2))
     W = _dense_window_matrix(7)
-    want = np.concatenate([(W @ x)[k * 7:(k + 1) * 7] for k in range(3)], axis=1)
+    want = np.concatenate([(W @ x)[k * 7 : (k + 1) * 7] for k in range(3)], axis=1)
     np.testing.assert_allclose(dynamic_features(x), want, atol=1e-12)
 
 
@@ -88,8 +89,10 @@ def test_viterbi_matches_exhaustive_search():
         best, best_path = -np.inf, None
         for cuts in itertools.combinations(range(1, n), S - 1):  # frames where a new state starts
             path = np.searchsorted(np.array(cuts), np.arange(n), side="right")
-            score = ll[b, 0, 0] + sum(ll[b, t, path[t]] + (move[b, path[t - 1]] if path[t] != path[t - 1]
-                                                            else stay[b, path[t]]) for t in range(1, n))
+            score = ll[b, 0, 0] + sum(
+                ll[b, t, path[t]] + (move[b, path[t - 1]] if path[t] != path[t - 1] else stay[b, path[t]])
+                for t in range(1, n)
+            )
             if score > best:
                 best, best_path = score, path
         np.testing.assert_array_equal(got[b], best_path)
@@ -108,9 +111,11 @@ def test_durations_sum_to_segment_and_follow_the_model(n):
 
 
 # -- data from a known HMM ----------------------------------------------------
-TRUE_MEANS = {"aa": [[0.0, 1.0], [2.0, -1.0], [1.0, 0.5]],
-              "iy": [[-2.0, 0.0], [0.5, 2.0], [-1.0, -1.5]],
-              "uw": [[2.5, 2.5], [-0.5, -2.0], [0.0, 3.0]]}
+TRUE_MEANS = {
+    "aa": [[0.0, 1.0], [2.0, -1.0], [1.0, 0.5]],
+    "iy": [[-2.0, 0.0], [0.5, 2.0], [-1.0, -1.5]],
+    "uw": [[2.5, 2.5], [-0.5, -2.0], [0.0, 3.0]],
+}
 TRUE_DURATIONS = {"aa": [4, 10, 6], "iy": [8, 5, 9], "uw": [5, 6, 12]}
 
 
@@ -130,8 +135,7 @@ def _hmm_corpus(means, durations, n_utts=30, noise=0.05, seed=0):
             ends.append((t + n) / FR)
             t += n
         y = np.concatenate(frames) + noise * rng.normal(size=(t, 2))
-        utts.append(dam.Utterance(dam.Alignment(labels, starts, ends), y, FR, channels=("a", "b"),
-                                  name=f"u{i}"))
+        utts.append(dam.Utterance(dam.Alignment(labels, starts, ends), y, FR, channels=("a", "b"), name=f"u{i}"))
     return dam.Corpus(utts)
 
 
@@ -170,8 +174,9 @@ def test_hmm_fits_trajectories_of_a_known_hmm():
         for s in range(3):
             mean, _ = model.state_gaussian([p], s)
             step = np.abs(np.diff(np.asarray(TRUE_MEANS[p]), axis=0)).max()
-            np.testing.assert_allclose(mean, TRUE_MEANS[p][s], atol=0.03 + 2 * step / TRUE_DURATIONS[p][s],
-                                       err_msg=f"{p} state {s}")
+            np.testing.assert_allclose(
+                mean, TRUE_MEANS[p][s], atol=0.03 + 2 * step / TRUE_DURATIONS[p][s], err_msg=f"{p} state {s}"
+            )
     # Synthesis with the training durations reproduces the state plateaus away from the joins.
     u = corpus[0]
     y = model.predict(u.alignment)
@@ -218,8 +223,7 @@ def test_grow_tree_on_sufficient_statistics():
     assert len(set(leaves)) == 2
     assert len(set(leaves[group < 2])) == 1 and set(leaves[group == 2]).isdisjoint(leaves[group < 2])
     # Without the MDL penalty and occupancy limit the same data splits much further.
-    loose = grow_tree(occ, sums, sumsq, ctx, columns, members, floor=np.full(2, 1e-4), mdl_factor=0.0,
-                      min_occupancy=1)
+    loose = grow_tree(occ, sums, sumsq, ctx, columns, members, floor=np.full(2, 1e-4), mdl_factor=0.0, min_occupancy=1)
     assert len(set(tree_leaves(loose, answers))) > 2
 
 
@@ -232,20 +236,22 @@ def test_phone_boundaries_are_honoured():
     b = dam.Alignment(a.labels[:-1] + (other,), a.starts, a.ends)
     ya, yb = model.predict(a), model.predict(b)
     last = int(round(a.starts[-1] * FR))
-    np.testing.assert_allclose(ya[:last - 10], yb[:last - 10], atol=1e-6)
-    assert np.abs(ya[last + 5:] - yb[last + 5:]).max() > 0.5
+    np.testing.assert_allclose(ya[: last - 10], yb[: last - 10], atol=1e-6)
+    assert np.abs(ya[last + 5 :] - yb[last + 5 :]).max() > 0.5
 
 
-@pytest.mark.parametrize("bad", [{"n_states": 0}, {"context": 3}, {"variance_floor": 0.0},
-                                 {"mdl_factor": -1.0}, {"unknown_phone": "guess"}])
+@pytest.mark.parametrize(
+    "bad", [{"n_states": 0}, {"context": 3}, {"variance_floor": 0.0}, {"mdl_factor": -1.0}, {"unknown_phone": "guess"}]
+)
 def test_bad_parameters_are_refused(bad):
     with pytest.raises(ValueError, match=next(iter(bad))):
         HMMSynthesizer(**bad).fit(_hmm_corpus(TRUE_MEANS, TRUE_DURATIONS, n_utts=2))
 
 
 def test_inspection_names_unknown_phones():
-    model = HMMSynthesizer(n_states=3, context=0, min_occupancy=5).fit(_hmm_corpus(TRUE_MEANS, TRUE_DURATIONS,
-                                                                                   n_utts=3))
+    model = HMMSynthesizer(n_states=3, context=0, min_occupancy=5).fit(
+        _hmm_corpus(TRUE_MEANS, TRUE_DURATIONS, n_utts=3)
+    )
     with pytest.raises(ValueError, match="zz"):
         model.state_gaussian(["zz"], 0)
     with pytest.raises(ValueError, match="3 states"):
@@ -254,6 +260,7 @@ def test_inspection_names_unknown_phones():
 
 def test_merge_silences_joins_only_adjacent_silences():
     from baselines.hmm import merge_silences
+
     a = dam.Alignment(["aa", "p", "sil", "aa"], [0.07, 0.1, 0.2, 0.3], [0.1, 0.2, 0.3, 0.4])  # gap -> silence
     assert a.labels == ("sil", "aa", "p", "sil", "aa")
     b = merge_silences(a.shifted(0.05))  # the new leading gap joins the first silence

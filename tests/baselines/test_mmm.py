@@ -1,9 +1,9 @@
 """MMM (Ezzat et al. 2002): banded solves, the adjoint gradient, recovery of known Gaussians."""
+
 import numpy as np
 import pytest
 
-from baselines.mmm import (MMM, banded_cholesky_solve, difference_gram_banded, mmm_system,
-                           synthesis_loss_and_gradient)
+from baselines.mmm import MMM, banded_cholesky_solve, difference_gram_banded, mmm_system, synthesis_loss_and_gradient
 from dam.corpus.data import Alignment, Corpus, Utterance
 
 PHONES = ["aa", "m", "s", "sil"]
@@ -17,7 +17,7 @@ def _dense(ab):
     M = np.zeros((n, n))
     for k in range(ab.shape[0]):
         idx = np.arange(n - k)
-        M[idx + k, idx] = M[idx, idx + k] = ab[k, :n - k]
+        M[idx + k, idx] = M[idx, idx + k] = ab[k, : n - k]
     return M
 
 
@@ -31,6 +31,7 @@ def test_difference_gram_is_WtW(order):
 @pytest.mark.parametrize("order", [1, 2])
 def test_banded_solves_equal_dense_solve(order):
     from scipy.linalg import solveh_banded
+
     rng = np.random.default_rng(order)
     n = 40
     prec = rng.uniform(0.1, 5.0, size=(3, n))  # a batch of three channels
@@ -81,8 +82,7 @@ def _generated_corpus(n_utts=14, seed=0):
         rows = np.array([PHONES.index(lab) for lab in a.labels])[seg]
         dw = 1.0 / np.bincount(seg)[seg]
         A = (dw[:, None] / TRUE_VAR[rows]).T
-        y = banded_cholesky_solve(mmm_system(A, difference_gram_banded(n, 2), TRUE_LAMBDA),
-                                  A * TRUE_MEAN[rows].T).T
+        y = banded_cholesky_solve(mmm_system(A, difference_gram_banded(n, 2), TRUE_LAMBDA), A * TRUE_MEAN[rows].T).T
         utts.append(Utterance(a, y, 100, ["x", "y"], name=f"u{k}"))
     return Corpus(utts)
 
@@ -101,10 +101,14 @@ def test_adjoint_gradient_matches_finite_differences():
     for k in range(4):
         e = np.zeros(4)
         e[k] = h
-        fd_mu = (synthesis_loss_and_gradient(mu + e, lv, utts, 5.0)[0]
-                 - synthesis_loss_and_gradient(mu - e, lv, utts, 5.0)[0]) / (2 * h)
-        fd_lv = (synthesis_loss_and_gradient(mu, lv + e, utts, 5.0)[0]
-                 - synthesis_loss_and_gradient(mu, lv - e, utts, 5.0)[0]) / (2 * h)
+        fd_mu = (
+            synthesis_loss_and_gradient(mu + e, lv, utts, 5.0)[0]
+            - synthesis_loss_and_gradient(mu - e, lv, utts, 5.0)[0]
+        ) / (2 * h)
+        fd_lv = (
+            synthesis_loss_and_gradient(mu, lv + e, utts, 5.0)[0]
+            - synthesis_loss_and_gradient(mu, lv - e, utts, 5.0)[0]
+        ) / (2 * h)
         np.testing.assert_allclose([gm[k], gl[k]], [fd_mu, fd_lv], rtol=1e-5, atol=1e-8)
 
 
@@ -123,7 +127,7 @@ def test_recovers_known_means_and_variances():
 def test_validation_chooses_the_generating_smoothness_among_far_candidates():
     corpus = _only_channel(_generated_corpus(), 1)
     scale = np.concatenate(corpus.trajectories).std()
-    right = TRUE_LAMBDA * scale ** 2
+    right = TRUE_LAMBDA * scale**2
     # with the variances fixed at their starting values (max_iter=0) only lambda differs
     model = MMM(smoothness=(right / 1000, right, right * 1000), max_iter=0).fit(corpus)
     assert model.smoothness_ == right, model.validation_rmse_
@@ -135,6 +139,7 @@ def _only_channel(corpus, c):
 
 def test_synthesis_without_scipy_equals_with_scipy(monkeypatch):
     import builtins
+
     model = MMM(smoothness=(10.0,), max_iter=5).fit(_generated_corpus(n_utts=4))
     a = _generated_corpus(n_utts=1, seed=3)[0].alignment
     with_scipy = model.predict(a)
@@ -151,18 +156,20 @@ def test_synthesis_without_scipy_equals_with_scipy(monkeypatch):
 
 def test_concatenated_utterances_solve_as_separate_ones():
     from baselines.mmm import _concatenated
+
     rng = np.random.default_rng(2)
     parts = []
     for n in (7, 12, 5):
         A = rng.uniform(0.5, 2, n)
         parts.append((A, difference_gram_banded(n, 2), rng.normal(size=n)))
     separate = np.concatenate([banded_cholesky_solve(mmm_system(A, g, 3.0), A * m) for A, g, m in parts])
-    (_, A, g, m), = _concatenated([(np.zeros(len(A), int), A, g, m) for A, g, m in parts])
+    ((_, A, g, m),) = _concatenated([(np.zeros(len(A), int), A, g, m) for A, g, m in parts])
     np.testing.assert_allclose(banded_cholesky_solve(mmm_system(A, g, 3.0), A * m), separate, rtol=1e-12)
 
 
 def test_training_start_uses_only_the_given_utterances():
     from baselines.mmm import _phone_start
+
     # two "utterances": phone 0 in both, phone 1 only in the second, phone 2 in neither
     part1 = (np.array([0, 0]), None, None, np.array([[1.0], [3.0]]))
     part2 = (np.array([0, 1, 1]), None, None, np.array([[5.0], [-1.0], [1.0]]))

@@ -3,16 +3,16 @@
 Every network is fitted once per module on a four-utterance corpus, with
 settings that share compiled code between the tests (refits reuse it).
 """
+
 import subprocess
 import sys
-
-import numpy as np
-import pytest
 
 # jax, equinox and optax are required for the test run (dam[test]; tests/conftest.py checks): no skipping here.
 import equinox  # noqa: E402, F401
 import jax  # noqa: E402, F401
+import numpy as np
 import optax  # noqa: E402, F401
+import pytest
 
 import dam  # noqa: E402
 from dam.corpus.data import Alignment, Corpus, Utterance  # noqa: E402
@@ -22,20 +22,40 @@ from dam.testing import clone  # noqa: E402
 OVERFIT = {
     "sliding-dnn": {"hidden_layer_sizes": (48, 48), "dropout": 0.0, "learning_rate": 3e-3, "batch_size": 32},
     "causal-mlp": {"hidden_layer_sizes": (48,), "dropout": 0.0, "learning_rate": 3e-3, "batch_size": 32},
-    "gru": {"n_layers": 1, "hidden_size": 24, "seq_len": 32, "dropout": 0.0, "learning_rate": 1e-2,
-            "batch_size": 8},
-    "lstm": {"hidden_size": 16, "dense_size": 16, "seq_len": 32, "dropout": 0.0, "learning_rate": 1e-2,
-             "batch_size": 8},
-    "transformer": {"window": 9, "n_layers": 1, "n_heads": 2, "d_model": 16, "d_ff": 32, "window_hop": 1,
-                    "dropout": 0.0, "learning_rate": 3e-3, "batch_size": 32},
+    "gru": {"n_layers": 1, "hidden_size": 24, "seq_len": 32, "dropout": 0.0, "learning_rate": 1e-2, "batch_size": 8},
+    "lstm": {
+        "hidden_size": 16,
+        "dense_size": 16,
+        "seq_len": 32,
+        "dropout": 0.0,
+        "learning_rate": 1e-2,
+        "batch_size": 8,
+    },
+    "transformer": {
+        "window": 9,
+        "n_layers": 1,
+        "n_heads": 2,
+        "d_model": 16,
+        "d_ff": 32,
+        "window_hop": 1,
+        "dropout": 0.0,
+        "learning_rate": 3e-3,
+        "batch_size": 32,
+    },
 }
 COMMON = {"max_epochs": 60, "validation_fraction": 0.0, "verbose": 0, "random_state": 0}
 CAUSAL = ["causal-mlp", "gru"]
 LOOKS_AHEAD = ["sliding-dnn", "lstm", "transformer"]  # centred windows or bidirectional
 
 
-PHONE_TARGETS = {"sil": (0.0, 0.0), "aa": (1.0, -0.5), "iy": (0.3, 1.0), "s": (-0.8, 0.6), "m": (-1.0, -1.0),
-                 "t": (0.5, 0.2)}
+PHONE_TARGETS = {
+    "sil": (0.0, 0.0),
+    "aa": (1.0, -0.5),
+    "iy": (0.3, 1.0),
+    "s": (-0.8, 0.6),
+    "m": (-1.0, -1.0),
+    "t": (0.5, 0.2),
+}
 
 
 def learnable_corpus(n_utterances=6, seed=0):
@@ -147,6 +167,7 @@ def test_lookahead_outputs_see_future_inputs(name, small):
 def test_bidirectional_state_ignores_padding(small):
     import equinox as eqx
     import jax.numpy as jnp
+
     model = fitted("lstm", small)
     net, enc = model._network(), model._input_encoder()
     a = small[0].alignment
@@ -154,17 +175,18 @@ def test_bidirectional_state_ignores_padding(small):
     outs = []
     for length in (len(x) + 3, len(x) + 40):
         xp = np.zeros((length, x.shape[1]), np.float32)
-        xp[:len(x)] = x
+        xp[: len(x)] = x
         m = (np.arange(length) < len(x)).astype(np.float32)
-        outs.append(np.asarray(eqx.filter_jit(net)(jnp.asarray(xp), jnp.asarray(m)))[:len(x)])
+        outs.append(np.asarray(eqx.filter_jit(net)(jnp.asarray(xp), jnp.asarray(m)))[: len(x)])
     np.testing.assert_allclose(outs[0], outs[1], rtol=0, atol=1e-5)
 
 
 @pytest.mark.parametrize("cell", ["gru", "lstm"])
 def test_recurrent_layer_equals_equinox_cell_step_by_step(cell):
     import equinox as eqx
-    import jax
+
     from baselines.nn.rnn import run_recurrent_layer
+
     make = eqx.nn.GRUCell if cell == "gru" else eqx.nn.LSTMCell
     c = make(3, 5, key=jax.random.key(1))
     xs = np.random.default_rng(0).standard_normal((7, 3)).astype(np.float32)
@@ -184,6 +206,7 @@ def test_recurrent_layer_equals_equinox_cell_step_by_step(cell):
 @pytest.mark.parametrize("name", ["sliding-dnn", "transformer"])
 def test_prediction_is_the_hand_average_of_overlapping_windows(name, small):
     from baselines.nn.train import predict_padded
+
     model = fitted(name, small)
     u = small[1]
     n, C = u.n_frames, small.n_channels
@@ -200,6 +223,7 @@ def test_prediction_is_the_hand_average_of_overlapping_windows(name, small):
 
 def test_causal_mlp_synthesizes_the_last_frame_of_each_window(small):
     from baselines.nn.train import predict_padded
+
     model = fitted("causal-mlp", small)
     u = small[1]
     windows = predict_padded(model._network(), model._inputs(model._input_encoder(), u.alignment, u.n_frames))
@@ -210,6 +234,7 @@ def test_causal_mlp_synthesizes_the_last_frame_of_each_window(small):
 @pytest.mark.parametrize("name", ["sliding-dnn", "gru"])
 def test_second_prediction_does_not_recompile(name, small):
     from baselines.nn import train
+
     model = fitted(name, small)
     fr = model.frame_rate_
     a = small[0].alignment
@@ -257,6 +282,8 @@ def test_verbose_zero_is_silent(small, capfd):
 
 
 def test_import_dam_and_listing_models_do_not_import_jax():
-    code = ("import sys, dam; from dam import registry; registry.names(); dam.make; "
-            "assert 'jax' not in sys.modules, 'jax imported'")
+    code = (
+        "import sys, dam; from dam import registry; registry.names(); dam.make; "
+        "assert 'jax' not in sys.modules, 'jax imported'"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=str(__import__("pathlib").Path(__file__).parents[1]))

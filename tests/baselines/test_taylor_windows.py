@@ -1,4 +1,5 @@
 """Taylor et al.'s windows at the corpus frame rate: window_rate gives the paper's span of context."""
+
 import numpy as np
 import pytest
 
@@ -22,17 +23,20 @@ def test_window_dilation_refuses_a_bad_rate():
 
 def test_sliding_dnn_reads_and_writes_dilated_windows():
     train, test = dam.testing.default_corpora()
-    model = dam.make("sliding-dnn", hidden_layer_sizes=(8,), max_epochs=1, verbose=0, kx=5, ky=3,
-                     window_rate=30.0).fit(train)
+    model = dam.make("sliding-dnn", hidden_layer_sizes=(8,), max_epochs=1, verbose=0, kx=5, ky=3, window_rate=30.0).fit(
+        train
+    )
     a = test[0].alignment
     n = a.n_frames(model.frame_rate_)
     assert model._dilation() == 3
     X = model._inputs(model._input_encoder(), a, n)
-    np.testing.assert_array_equal(X, window_features(a, model.frame_rate_, n, model._input_encoder().vocabulary,
-                                                     kx=5, dilation=3))
+    np.testing.assert_array_equal(
+        X, window_features(a, model.frame_rate_, n, model._input_encoder().vocabulary, kx=5, dilation=3)
+    )
     # the phones of the window of frame 20 are those of frames 14, 17, 20, 23, 26
     assert list(window_offsets(5, dilation=3) + 20) == [14, 17, 20, 23, 26]
     from baselines.nn.train import predict_padded
+
     windows = predict_padded(model._network(), X)
     want = overlap_average(windows, 3, train.n_channels, dilation=3) * model.y_scale_ + model.y_mean_
     np.testing.assert_allclose(model.predict(a), want, rtol=1e-6, atol=1e-9)

@@ -1,4 +1,5 @@
 """VisemeNet (Zhou et al. 2018), adapted: three stages from audio, activations and their thresholds."""
+
 import numpy as np
 import pytest
 
@@ -7,8 +8,19 @@ from baselines.nn.visemenet import VisemeNet, joint_loss
 from dam.corpus import AudioClip, frame_labels
 from dam.datasets.tones import tiny_with_audio
 
-SMALL = dict(n_past=3, n_future=3, hidden_size=32, n_layers=1, fc_size=32, seq_len=64, dropout=0.0,
-             pretrain_epochs=5, learning_rate=1e-2, batch_size=16, verbose=0)
+SMALL = dict(
+    n_past=3,
+    n_future=3,
+    hidden_size=32,
+    n_layers=1,
+    fc_size=32,
+    seq_len=64,
+    dropout=0.0,
+    pretrain_epochs=5,
+    learning_rate=1e-2,
+    batch_size=16,
+    verbose=0,
+)
 
 
 @pytest.fixture(scope="module")
@@ -25,6 +37,7 @@ def fitted(tones):
 def test_learns_a_small_audio_corpus(tones):
     """The joint multi-task loss on 8 utterances falls by 90% from the untrained network's."""
     import jax.numpy as jnp
+
     train, _ = tones
     small = train.subset(range(8))
     m = VisemeNet(**SMALL, max_epochs=120, validation_fraction=0.0).fit(small)
@@ -65,8 +78,9 @@ def test_activation_precision_recall_by_counting(fitted, tones):
     train, test = tones
     Y = np.concatenate(train.trajectories)
     std = np.where(Y.std(axis=0) > 1e-12, Y.std(axis=0), 1.0)
-    sil = np.concatenate([u.trajectory[np.array(frame_labels(u.alignment, u.frame_rate, u.n_frames)) == "sil"]
-                          for u in train])
+    sil = np.concatenate(
+        [u.trajectory[np.array(frame_labels(u.alignment, u.frame_rate, u.n_frames)) == "sil"] for u in train]
+    )
     rest = sil.mean(axis=0)
     tp = n_pred = n_true = 0
     for u in test:
@@ -104,16 +118,17 @@ def test_look_ahead_is_bounded_by_n_future(fitted, tones):
     _, test = tones
     u = max(test, key=lambda v: v.n_frames)
     from scipy.io import wavfile
+
     sr, x = wavfile.read(u.audio)
     x = x.astype(float) / 32768
     changed = x.copy()
-    changed[int(0.5 * sr):] = np.random.default_rng(0).uniform(-0.5, 0.5, len(x) - int(0.5 * sr))
+    changed[int(0.5 * sr) :] = np.random.default_rng(0).uniform(-0.5, 0.5, len(x) - int(0.5 * sr))
     a = fitted.predict(AudioClip(x, sr))
     b = fitted.predict(AudioClip(changed, sr))
     first_touched = 49  # frame 49's window, centred at 0.49 s, reaches 0.5025 s
     safe = first_touched - fitted.n_future
     np.testing.assert_allclose(a[:safe], b[:safe], rtol=1e-6, atol=1e-9)
-    assert not np.allclose(a[first_touched + 5:], b[first_touched + 5:])
+    assert not np.allclose(a[first_touched + 5 :], b[first_touched + 5 :])
 
 
 def test_needs_an_audio_encoder_and_audio():

@@ -1,9 +1,9 @@
 """The command line: conventions, the main jobs and one-line errors."""
+
 import subprocess
 import sys
 
 import numpy as np
-import pytest
 
 from dam.cli import main, parse_param
 
@@ -24,6 +24,7 @@ def test_fit_predict_evaluate(tmp_path, capsys):
     assert main(["evaluate", str(model), "tiny"]) == 0
     assert "overall" in capsys.readouterr().out
     from dam.datasets import path
+
     tg = sorted(path("tiny").glob("*.TextGrid"))[0]
     out = tmp_path / "y.csv"
     assert main(["-q", "predict", str(model), str(tg), "-o", str(out)]) == 0

@@ -1,5 +1,6 @@
 """Issue 13, what a new user meets first: mistakes caught before any work, missing extras that
 say what to install, messages without placeholders, the demo saying what it does."""
+
 import json
 import subprocess
 import sys
@@ -10,8 +11,9 @@ import dam
 
 
 def _dam(*args, cwd, env=None):
-    return subprocess.run([sys.executable, "-m", "dam.cli", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=600, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "dam.cli", *args], cwd=cwd, capture_output=True, text=True, timeout=600, env=env
+    )
 
 
 def test_compare_refuses_an_unknown_model_before_fitting_any(tmp_path):
@@ -23,8 +25,18 @@ def test_compare_refuses_an_unknown_model_before_fitting_any(tmp_path):
 
 
 def test_compare_refuses_a_bad_parameter_value_before_fitting_any(tmp_path):
-    done = _dam("--progress", "json", "compare", "--models", "phone-mean,dam", "-p", "dam.degree=abc",
-                "--train", "tiny", cwd=tmp_path)
+    done = _dam(
+        "--progress",
+        "json",
+        "compare",
+        "--models",
+        "phone-mean,dam",
+        "-p",
+        "dam.degree=abc",
+        "--train",
+        "tiny",
+        cwd=tmp_path,
+    )
     assert done.returncode == 1
     assert "'degree'" in done.stderr and "'abc'" in done.stderr
     assert not [line for line in done.stderr.splitlines() if line.startswith("{")]
@@ -51,8 +63,9 @@ _NO_EQUINOX = "import sys; sys.modules['equinox'] = None\n"
 
 
 def test_a_missing_extra_says_which_pip_command(tmp_path):
-    code = _NO_EQUINOX + ("import dam\ntry:\n    dam.make('gru')\nexcept ImportError as exc:\n"
-                          "    print(type(exc).__name__, exc)\n")
+    code = _NO_EQUINOX + (
+        "import dam\ntry:\n    dam.make('gru')\nexcept ImportError as exc:\n    print(type(exc).__name__, exc)\n"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("MissingExtraError")
@@ -63,7 +76,7 @@ def test_dam_models_says_exactly_what_is_missing(tmp_path):
     code = _NO_EQUINOX + "from dam.cli import main\nmain(['models'])\n"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     lines = {ln.split()[0]: ln for ln in done.stdout.splitlines() if ln.strip()}
-    assert "unavailable" in lines["gru"] and "'equinox'" in lines["gru"] and 'dam[jax]' in lines["gru"]
+    assert "unavailable" in lines["gru"] and "'equinox'" in lines["gru"] and "dam[jax]" in lines["gru"]
     assert "unavailable" not in lines["dam"]
     # with equinox installed (this environment), the network is listed as usable
     done2 = _dam("models", cwd=tmp_path)
@@ -73,6 +86,7 @@ def test_dam_models_says_exactly_what_is_missing(tmp_path):
 
 def test_extra_for_reads_pyproject_extras():
     from dam.registry import extra_for
+
     assert extra_for("equinox") == "jax" and extra_for("optax") == "jax"
     assert extra_for("vocaltractlab_cython") == "vtl"
     assert extra_for("numpy") is None
@@ -99,8 +113,18 @@ def test_predict_positionals_have_help(tmp_path):
 
 
 def test_compare_names_its_files_without_a_double_slash(tmp_path):
-    done = _dam("compare", "--models", "phone-mean,target-interpolation", "--train", "tiny", "--cv", "2",
-                "--out", "results/", cwd=tmp_path)
+    done = _dam(
+        "compare",
+        "--models",
+        "phone-mean,target-interpolation",
+        "--train",
+        "tiny",
+        "--cv",
+        "2",
+        "--out",
+        "results/",
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
     assert "wrote results/summary.csv" in done.stderr and "//" not in done.stderr
     assert (tmp_path / "results" / "summary.csv").exists()
@@ -108,6 +132,7 @@ def test_compare_names_its_files_without_a_double_slash(tmp_path):
 
 def test_demo_says_what_it_does_before_doing_it(tmp_path):
     from dam.evaluation.compare import demo_plan
+
     plan = demo_plan("vtl")
     assert len(plan["channels"]) == 3 and plan["train_minutes"] is None and len(plan["models"]) == 6
     assert plan["description"].startswith("dam demo: fits 6 models") and "minute" in plan["description"]

@@ -1,4 +1,5 @@
 """The data model: alignments, utterances, corpora and their validation."""
+
 import numpy as np
 import pytest
 
@@ -17,9 +18,9 @@ def test_silence_spellings_and_gaps_become_silence_merged():
 
 
 def test_adjacent_silences_from_file_merge_into_one():
-    a = Alignment(["sil", "sp", "a", "pau", "", "sil"], [0, .1, .2, .3, .4, .45], [.1, .2, .3, .4, .45, .5])
+    a = Alignment(["sil", "sp", "a", "pau", "", "sil"], [0, 0.1, 0.2, 0.3, 0.4, 0.45], [0.1, 0.2, 0.3, 0.4, 0.45, 0.5])
     assert a.labels == (SILENCE, "a", SILENCE)
-    np.testing.assert_allclose(np.c_[a.starts, a.ends], [[0, .2], [.2, .3], [.3, .5]])
+    np.testing.assert_allclose(np.c_[a.starts, a.ends], [[0, 0.2], [0.2, 0.3], [0.3, 0.5]])
 
 
 def test_leading_gap_is_silence_and_custom_silence_label():
@@ -36,17 +37,20 @@ def test_frame_convention():
         for n in (2, 7, 123):
             end = (n - 1) / fr
             assert Alignment(["a"], [0], [end]).n_frames(fr) == n
-            assert Alignment(["a"], [0], [round(end, 6)]).n_frames(fr) == n      # as a TextGrid stores it
+            assert Alignment(["a"], [0], [round(end, 6)]).n_frames(fr) == n  # as a TextGrid stores it
             assert Alignment(["a"], [0], [end + 0.99 / fr]).n_frames(fr) == n
 
 
-@pytest.mark.parametrize("labels,starts,ends,field,problem", [
-    (["a", "b"], [0, 0.1], [0.1, 0.1], "segment 1 ('b')", "zero-length"),
-    (["a", "b"], [0, 0.05], [0.1, 0.2], "segment 1 ('b') start", "overlaps"),
-    (["a", "b"], [0.1, 0.0], [0.2, 0.05], "segment 1 ('b') start", "not sorted"),
-    (["a", "b"], [0, np.nan], [0.1, 0.2], "segment 1 ('b') start", "not finite"),
-    ([], [], [], "segments", "no segments"),
-])
+@pytest.mark.parametrize(
+    "labels,starts,ends,field,problem",
+    [
+        (["a", "b"], [0, 0.1], [0.1, 0.1], "segment 1 ('b')", "zero-length"),
+        (["a", "b"], [0, 0.05], [0.1, 0.2], "segment 1 ('b') start", "overlaps"),
+        (["a", "b"], [0.1, 0.0], [0.2, 0.05], "segment 1 ('b') start", "not sorted"),
+        (["a", "b"], [0, np.nan], [0.1, 0.2], "segment 1 ('b') start", "not finite"),
+        ([], [], [], "segments", "no segments"),
+    ],
+)
 def test_bad_alignments_name_file_field_value(labels, starts, ends, field, problem):
     with pytest.raises(DataError) as err:
         Alignment(labels, starts, ends, source="x.TextGrid")
@@ -62,7 +66,7 @@ def _utt(n=30, channels=("a", "b"), end=0.3, **kw):
 def test_utterance_pads_alignment_with_trailing_silence_and_trims_one_frame():
     u = _utt(n=35)
     assert u.alignment.labels[-1] == SILENCE and u.alignment.n_frames(100) == 35
-    assert u.alignment.ends[-1] == pytest.approx(0.34)     # the last frame time
+    assert u.alignment.ends[-1] == pytest.approx(0.34)  # the last frame time
     u = _utt(n=29)  # two frames short: the last segment is trimmed to the last frame time
     assert u.alignment.n_frames(100) == 29 and u.alignment.labels[-1] == "aa"
     assert u.alignment.ends[-1] == pytest.approx(0.28)
@@ -96,17 +100,17 @@ def test_sub_frame_gaps_and_overhangs_are_absorbed_not_segments():
     assert a.labels == ("sil", "a", "sil", "b", "sil", "c")
     u = Utterance(a, np.zeros((30, 1)), fr, ["x"])
     assert u.alignment.labels == ("a", "b", "c")
-    np.testing.assert_allclose(np.c_[u.alignment.starts, u.alignment.ends], [[0, .1], [.1, .205], [.205, .29]])
+    np.testing.assert_allclose(np.c_[u.alignment.starts, u.alignment.ends], [[0, 0.1], [0.1, 0.205], [0.205, 0.29]])
     # a real pause at the end (3 frames) extends the trailing silence instead of adding a second one
     a = Alignment(["sil", "a", "sil"], [0, 0.1, 0.2], [0.1, 0.2, 0.26])
     u = Utterance(a, np.zeros((30, 1)), fr, ["x"])
     assert u.alignment.labels == ("sil", "a", "sil") and u.alignment.ends[-1] == pytest.approx(0.29)
-    for u in (u,):
-        assert u.alignment.n_frames(fr) == u.n_frames
+    assert u.alignment.n_frames(fr) == u.n_frames
 
 
 def test_edge_convention_round_trips_through_files(tmp_path):
     from dam.corpus.io import load_corpus, save_corpus
+
     fr = 100.0
     a = Alignment(["sil", "a", "sil"], [0, 0.1, 0.2], [0.1, 0.2, 0.29])
     c = Corpus([Utterance(a, np.arange(30.0)[:, None], fr, ["x"], name="u")])

@@ -1,13 +1,13 @@
 """EST track files (mngu0 / MOCHA-TIMIT EMA): reader, writer, corpus loading."""
+
 import struct
 
 import numpy as np
 import pytest
 
-from dam.corpus.data import DataError
+from dam.corpus.data import Alignment, DataError
 from dam.corpus.formats.est import read_est, read_est_trajectory, stored_frame_rate, write_est
 from dam.corpus.io import load_corpus, write_lab
-from dam.corpus.data import Alignment
 
 HEADER = (
     "EST_File Track\n"
@@ -42,8 +42,10 @@ def test_hand_written_binary_layout(tmp_path, order, fmt):
 
 
 def test_hand_written_ascii(tmp_path):
-    text = ("EST_File Track\nDataType ascii\nNumFrames 2\nNumChannels 3\nBreaksPresent true\n"
-            "EST_Header_End\n0.000000 1 1 2 3\n0.010000 1 4 5 6.5\n")
+    text = (
+        "EST_File Track\nDataType ascii\nNumFrames 2\nNumChannels 3\nBreaksPresent true\n"
+        "EST_Header_End\n0.000000 1 1 2 3\n0.010000 1 4 5 6.5\n"
+    )
     path = tmp_path / "x.est"
     path.write_text(text)
     tr = read_est(path)
@@ -116,8 +118,9 @@ def test_ema_corpus_with_htk_labels_loads(tmp_path):
         vals = rng.normal(size=(n, 3)).astype(np.float32)
         write_est(tmp_path / f"{stem}.ema", vals, frame_rate=200.0, channels=["tt_x", "tt_y", "li_y"])
         dur = n / 200.0
-        write_lab(Alignment(["sil", "a", "sil"], [0, 0.05, dur - 0.05], [0.05, dur - 0.05, dur]),
-                  tmp_path / f"{stem}.lab")
+        write_lab(
+            Alignment(["sil", "a", "sil"], [0, 0.05, dur - 0.05], [0.05, dur - 0.05, dur]), tmp_path / f"{stem}.lab"
+        )
         truth[stem] = vals
     corpus = load_corpus(tmp_path)
     assert corpus.frame_rate == 200.0
@@ -134,4 +137,6 @@ def test_frame_rate_survives_float32_times(rate, n):
     assert stored_frame_rate(t32) == rate
     # an odd rate comes back within the precision the times carry
     odd = 44100 / 110
-    assert stored_frame_rate((np.arange(n) / odd).astype(np.float32)) == pytest.approx(odd, rel=2e-3 if n == 3 else 1e-5)
+    assert stored_frame_rate((np.arange(n) / odd).astype(np.float32)) == pytest.approx(
+        odd, rel=2e-3 if n == 3 else 1e-5
+    )

@@ -1,14 +1,24 @@
 """Frame-wise window features and output-window blending (dam.features)."""
+
 import numpy as np
 import pytest
 
 from dam.corpus.data import Alignment, DataError
-from dam.corpus.features import (fit_transition_clusters, frame_phone_indices, n_window_features, overlap_average,
-                          phone_vocabulary, window_feature_names, window_features, window_targets)
+from dam.corpus.features import (
+    fit_transition_clusters,
+    frame_phone_indices,
+    n_window_features,
+    overlap_average,
+    phone_vocabulary,
+    window_feature_names,
+    window_features,
+    window_targets,
+)
 
 # Taylor et al. (2017) supplementary: 40 phones plus silence ("sp" kept apart here).
-TAYLOR_PHONES = ("sil dh ih s z uh p r aa b l m th ae d g ow k n er iy y w eh ch v t sh f ah sp hh aw oy uw "
-                 "ey ao zh ay jh ng").split()
+TAYLOR_PHONES = (
+    "sil dh ih s z uh p r aa b l m th ae d g ow k n er iy y w eh ch v t sh f ah sp hh aw oy uw ey ao zh ay jh ng"
+).split()
 
 
 def _hand_alignment():
@@ -18,9 +28,7 @@ def _hand_alignment():
 
 def test_overlap_average_hand_computation_center():
     # n = 3 frames, ky = 3, one channel; row i predicts frames i-1, i, i+1.
-    P = np.array([[1.0, 2.0, 3.0],
-                  [4.0, 5.0, 6.0],
-                  [7.0, 8.0, 9.0]])
+    P = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]])
     # frame 0: window 0 entry 1 (2), window 1 entry 0 (4)            -> 3
     # frame 1: window 0 entry 2 (3), window 1 entry 1 (5), window 2 entry 0 (7) -> 5
     # frame 2: window 1 entry 2 (6), window 2 entry 1 (8)            -> 7
@@ -30,9 +38,7 @@ def test_overlap_average_hand_computation_center():
 
 def test_overlap_average_hand_computation_causal_two_channels():
     # ky = 2 causal: row i predicts frames i-1, i; layout frame-major, channels fastest.
-    P = np.array([[10.0, -1.0, 1.0, -2.0],
-                  [2.0, -3.0, 3.0, -4.0],
-                  [4.0, -5.0, 5.0, -6.0]])
+    P = np.array([[10.0, -1.0, 1.0, -2.0], [2.0, -3.0, 3.0, -4.0], [4.0, -5.0, 5.0, -6.0]])
     out = overlap_average(P, ky=2, n_channels=2, align="causal")
     # frame 0: window 0 entry 1 (1,-2), window 1 entry 0 (2,-3)
     # frame 1: window 1 entry 1 (3,-4), window 2 entry 0 (4,-5); frame 2: window 2 entry 1 (5,-6)
@@ -42,9 +48,9 @@ def test_overlap_average_hand_computation_causal_two_channels():
 def test_window_targets_rows_and_round_trip():
     Y = np.arange(12.0).reshape(6, 2)
     T = window_targets(Y, ky=3)
-    np.testing.assert_allclose(T[0], [0, 1, 0, 1, 2, 3])        # frame -1 repeats frame 0
+    np.testing.assert_allclose(T[0], [0, 1, 0, 1, 2, 3])  # frame -1 repeats frame 0
     np.testing.assert_allclose(T[3], [4, 5, 6, 7, 8, 9])
-    np.testing.assert_allclose(T[5], [8, 9, 10, 11, 10, 11])    # frame 6 repeats frame 5
+    np.testing.assert_allclose(T[5], [8, 9, 10, 11, 10, 11])  # frame 6 repeats frame 5
     for ky, align in [(5, "center"), (4, "center"), (3, "causal")]:
         np.testing.assert_allclose(overlap_average(window_targets(Y, ky=ky, align=align), ky, 2, align), Y)
 
@@ -84,8 +90,15 @@ def test_linguistic_features_of_hand_alignment():
     # frame 2: window sil | p | aa
     assert {"phone[0]=sil", "phone[1]=p", "phone[2]=aa"} <= on[2]
     assert not any(n.startswith("phone[") and ":" in n for n in on[2])  # no phone spans 2+ frames
-    assert {"cat[1]=Plosive", "cat[1]=Bilabial", "cat[1]=Unvoiced-Plosive", "cat[2]=Vowel",
-            "cat[2]=Vowel-starting-a", "cat[2]=Long-Vowel", "cat[0]=silences"} <= on[2]
+    assert {
+        "cat[1]=Plosive",
+        "cat[1]=Bilabial",
+        "cat[1]=Unvoiced-Plosive",
+        "cat[2]=Vowel",
+        "cat[2]=Vowel-starting-a",
+        "cat[2]=Long-Vowel",
+        "cat[0]=silences",
+    } <= on[2]
     assert "cat[1]=Nasal" not in on[2] and "cat[2]=Vowel-ending-h" not in on[2]
     # p -> aa is consonant + vowel starting with /a/; aa is a back vowel: phonetic CV cluster 1
     assert {"C+vowel_starting_a[1,2]", "CV[1,2]=1"} <= on[2]
@@ -133,6 +146,7 @@ def test_fit_transition_clusters_separates_pair_types(tiny_pair_corpus):
 @pytest.fixture
 def tiny_pair_corpus():
     from dam.corpus.data import Corpus, Utterance
+
     utts = []
     for k, (c, v, level) in enumerate([("p", "aa", 0.0), ("b", "aa", 0.5), ("m", "uw", 10.0), ("p", "uw", 10.5)]):
         a = Alignment(["sil", c, v, "sil"], [0, 0.1, 0.2, 0.4], [0.1, 0.2, 0.4, 0.5])
@@ -156,13 +170,15 @@ def test_dilated_windows_hand_computation():
 
 def test_guess_alphabet():
     from dam.corpus.phonetics import guess_alphabet
-    assert guess_alphabet(["a:", "OY", "aI", "S", "sil"]) == "sampa"   # OY is SAMPA too
+
+    assert guess_alphabet(["a:", "OY", "aI", "S", "sil"]) == "sampa"  # OY is SAMPA too
     assert guess_alphabet(["AH0", "S", "N"]) == "arpabet"
     assert guess_alphabet(["iy", "sh", "sil"]) == "arpabet"
 
 
 def test_fallback_reads_upper_case_arpabet_as_arpabet():
     from dam.corpus.phonetics import fallback_phone, phone_class
+
     # ARPAbet T, S, N are alveolar /t s n/; the same letters in SAMPA are /θ ʃ ŋ/.
     assert [phone_class(p, "arpabet") for p in ("T", "S", "N")] == ["alveolar"] * 3
     assert [phone_class(p, "sampa") for p in ("T", "S", "N")] == ["dental", "postalveolar", "velar"]

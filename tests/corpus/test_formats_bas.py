@@ -1,4 +1,5 @@
 """BAS Partitur (.par) files as WebMAUS writes them, written here by hand from the BPF description."""
+
 import wave
 
 import numpy as np
@@ -40,7 +41,7 @@ def test_par_mau_tier_times_in_samples(tmp_path):
     begins = np.array([0, 800, 2000, 3600, 4400, 6000, 8400, 10800])
     durs = np.array([799, 1199, 1599, 799, 1599, 2399, 2399, 1599])
     np.testing.assert_allclose(a.starts, begins / 16000)
-    np.testing.assert_allclose(a.ends, (begins + durs + 1) / 16000)   # inclusive sample ranges
+    np.testing.assert_allclose(a.ends, (begins + durs + 1) / 16000)  # inclusive sample ranges
     assert a.duration == pytest.approx(0.775)
 
 
@@ -60,12 +61,15 @@ def test_mau_only_file_takes_the_rate_of_its_wav(tmp_path):
     assert read_par(p, sample_rate=32000).ends[-1] == pytest.approx(12400 / 32000)
 
 
-@pytest.mark.parametrize("old, new, field, value", [
-    ("SAM: 16000", "SAM: fast", "SAM", "fast"),
-    ("MAU: 800 1199 0 g", "MAU: 800.5 1199 0 g", "line 15 (MAU) begin/duration/word", "800.5"),
-    ("MAU: 800 1199 0 g", "MAU: 800 1199", "line 15 (MAU)", "800 1199"),
-    ("MAU: 800 1199 0 g", "MAU 800 1199 0 g", "line 15", "MAU 800 1199 0 g"),
-])
+@pytest.mark.parametrize(
+    "old, new, field, value",
+    [
+        ("SAM: 16000", "SAM: fast", "SAM", "fast"),
+        ("MAU: 800 1199 0 g", "MAU: 800.5 1199 0 g", "line 15 (MAU) begin/duration/word", "800.5"),
+        ("MAU: 800 1199 0 g", "MAU: 800 1199", "line 15 (MAU)", "800 1199"),
+        ("MAU: 800 1199 0 g", "MAU 800 1199 0 g", "line 15", "MAU 800 1199 0 g"),
+    ],
+)
 def test_malformed_par_is_refused(tmp_path, old, new, field, value):
     p = tmp_path / "bad.par"
     p.write_text(PAR.replace(old, new))

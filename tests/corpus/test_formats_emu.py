@@ -1,4 +1,5 @@
 """EMU-SDMS databases and SSFF tracks, written by hand from The EMU-SDMS Manual (ch. 15.1)."""
+
 import base64
 import json
 import struct
@@ -20,8 +21,12 @@ def ssff_bytes(columns, rate, start="0.0", machine="IBM-PC", extra=(), end="----
     head = ["SSFF -- (c) SHLRC", f"Machine {machine}", f"Record_Freq {rate}", f"Start_Time {start}"]
     head += [f"Column {n} {t} {k}" for n, t, k, _ in columns] + list(extra) + [end]
     n_rec = len(columns[0][3])
-    body = b"".join(struct.pack(order + "".join(fmt[t] * k for _, t, k, _ in columns),
-                                *[v for _, _, _, rows in columns for v in rows[i]]) for i in range(n_rec))
+    body = b"".join(
+        struct.pack(
+            order + "".join(fmt[t] * k for _, t, k, _ in columns), *[v for _, _, _, rows in columns for v in rows[i]]
+        )
+        for i in range(n_rec)
+    )
     return ("\n".join(head) + "\n").encode() + body
 
 
@@ -29,8 +34,14 @@ def test_ssff_reads_the_manuals_fms_example(tmp_path):
     fm = [(500, 1500, 2500, 3500), (510, 1490, 2600, 3400), (520, 1480, 2700, 3300)]
     bw = [(50, 100, 150, 200), (55, 105, 155, 205), (60, 110, 160, 210)]
     p = tmp_path / "msajc003.fms"
-    p.write_bytes(ssff_bytes([("fm", "SHORT", 4, fm), ("bw", "SHORT", 4, bw)], "200.0", start="0.0025",
-                             extra=["Original_Freq DOUBLE 20000.0"]))
+    p.write_bytes(
+        ssff_bytes(
+            [("fm", "SHORT", 4, fm), ("bw", "SHORT", 4, bw)],
+            "200.0",
+            start="0.0025",
+            extra=["Original_Freq DOUBLE 20000.0"],
+        )
+    )
     f = read_ssff(p)
     assert f.record_freq == 200.0 and f.start_time == 0.0025 and f.machine == "IBM-PC"
     np.testing.assert_array_equal(f.columns["fm"], fm)
@@ -45,8 +56,13 @@ def test_ssff_reads_the_manuals_fms_example(tmp_path):
 def test_ssff_big_endian_doubles_and_mixed_types(tmp_path):
     rows = [(1.25, -2.5), (3.0, 4.125)]
     p = tmp_path / "a.ema"
-    p.write_bytes(ssff_bytes([("tt", "DOUBLE", 2, rows), ("q", "LONG", 1, [(7,), (-9,)]),
-                              ("b", "BYTE", 1, [(200,), (3,)])], "500", machine="SPARC"))
+    p.write_bytes(
+        ssff_bytes(
+            [("tt", "DOUBLE", 2, rows), ("q", "LONG", 1, [(7,), (-9,)]), ("b", "BYTE", 1, [(200,), (3,)])],
+            "500",
+            machine="SPARC",
+        )
+    )
     f = read_ssff(p)
     np.testing.assert_array_equal(f.columns["tt"], rows)
     np.testing.assert_array_equal(f.columns["q"].ravel(), [7, -9])
@@ -60,28 +76,43 @@ def test_write_ssff_round_trip_and_layout(tmp_path, machine):
     tt = rng.normal(size=(7, 3))
     f0 = rng.integers(-300, 300, size=7)
     p = tmp_path / "r.ssff"
-    write_ssff(p, {"tt": tt, "f0": f0}, 250.0, start_time=0.002, types={"f0": "SHORT"}, machine=machine,
-               extra={"Original_Freq": ("DOUBLE", 16000.0)})
+    write_ssff(
+        p,
+        {"tt": tt, "f0": f0},
+        250.0,
+        start_time=0.002,
+        types={"f0": "SHORT"},
+        machine=machine,
+        extra={"Original_Freq": ("DOUBLE", 16000.0)},
+    )
     back = read_ssff(p)
     np.testing.assert_array_equal(back.columns["tt"], tt)
     np.testing.assert_array_equal(back.columns["f0"].ravel(), f0)
     assert (back.record_freq, back.start_time, back.machine) == (250.0, 0.002, machine)
     # the bytes are what struct packs by hand: the writer follows the documented layout
-    expected = ssff_bytes([("tt", "DOUBLE", 3, [tuple(r) for r in tt]), ("f0", "SHORT", 1, [(int(v),) for v in f0])],
-                          "250.0", start="0.002", machine=machine, extra=["Original_Freq DOUBLE 16000.0"])
+    expected = ssff_bytes(
+        [("tt", "DOUBLE", 3, [tuple(r) for r in tt]), ("f0", "SHORT", 1, [(int(v),) for v in f0])],
+        "250.0",
+        start="0.002",
+        machine=machine,
+        extra=["Original_Freq DOUBLE 16000.0"],
+    )
     assert p.read_bytes() == expected
 
 
-@pytest.mark.parametrize("mutate, field, value", [
-    (lambda b: b.replace(b"SSFF -- (c) SHLRC", b"SSFX -- (c) SHLRC"), "header", "SSFX"),
-    (lambda b: b.replace(b"Machine IBM-PC", b"Machine PDP-11"), "Machine", "PDP-11"),
-    (lambda b: b.replace(b"Column tt DOUBLE 2", b"Column tt QUAD 2"), "Column tt type", "QUAD"),
-    (lambda b: b.replace(b"Record_Freq 100.0\n", b""), "Record_Freq", "None"),
-    (lambda b: b.replace(b"Record_Freq 100.0", b"Record_Freq fast"), "Record_Freq", "fast"),
-    (lambda b: b.replace(b"Column tt DOUBLE 2", b"Column tt DOUBLE x"), "Column tt count", "x"),
-    (lambda b: b[:-3], "data size", "29 bytes"),
-    (lambda b: b.replace(b"-----------------\n", b""), "header", "-----------------"),
-])
+@pytest.mark.parametrize(
+    "mutate, field, value",
+    [
+        (lambda b: b.replace(b"SSFF -- (c) SHLRC", b"SSFX -- (c) SHLRC"), "header", "SSFX"),
+        (lambda b: b.replace(b"Machine IBM-PC", b"Machine PDP-11"), "Machine", "PDP-11"),
+        (lambda b: b.replace(b"Column tt DOUBLE 2", b"Column tt QUAD 2"), "Column tt type", "QUAD"),
+        (lambda b: b.replace(b"Record_Freq 100.0\n", b""), "Record_Freq", "None"),
+        (lambda b: b.replace(b"Record_Freq 100.0", b"Record_Freq fast"), "Record_Freq", "fast"),
+        (lambda b: b.replace(b"Column tt DOUBLE 2", b"Column tt DOUBLE x"), "Column tt count", "x"),
+        (lambda b: b[:-3], "data size", "29 bytes"),
+        (lambda b: b.replace(b"-----------------\n", b""), "header", "-----------------"),
+    ],
+)
 def test_malformed_ssff_is_refused_naming_file_field_value(tmp_path, mutate, field, value):
     good = ssff_bytes([("tt", "DOUBLE", 2, [(1.0, 2.0), (3.0, 4.0)])], "100.0")
     p = tmp_path / "bad.ema"
@@ -94,8 +125,10 @@ def test_malformed_ssff_is_refused_naming_file_field_value(tmp_path, mutate, fie
 
 # -- an emuDB on disk ---------------------------------------------------------
 def segment_items(level, segs, start_id=1):
-    return [{"id": start_id + i, "sampleStart": s, "sampleDur": d, "labels": [{"name": level, "value": lab}]}
-            for i, (s, d, lab) in enumerate(segs)]
+    return [
+        {"id": start_id + i, "sampleStart": s, "sampleDur": d, "labels": [{"name": level, "value": lab}]}
+        for i, (s, d, lab) in enumerate(segs)
+    ]
 
 
 def make_emudb(root, bundles, *, rate_annot=20000, start="0.0"):
@@ -103,35 +136,52 @@ def make_emudb(root, bundles, *, rate_annot=20000, start="0.0"):
     db = root / "test_emuDB"
     db.mkdir()
     config = {
-        "name": "test", "UUID": "0fc618dc-8980-414d-8c7a-144a649ce199", "mediafileExtension": "wav",
-        "ssffTrackDefinitions": [{"name": "tt", "columnName": "tt", "fileExtension": "pos"},
-                                 {"name": "ul", "columnName": "ul", "fileExtension": "pos"}],
+        "name": "test",
+        "UUID": "0fc618dc-8980-414d-8c7a-144a649ce199",
+        "mediafileExtension": "wav",
+        "ssffTrackDefinitions": [
+            {"name": "tt", "columnName": "tt", "fileExtension": "pos"},
+            {"name": "ul", "columnName": "ul", "fileExtension": "pos"},
+        ],
         "levelDefinitions": [
             {"name": "Utterance", "type": "ITEM", "attributeDefinitions": [{"name": "Utterance", "type": "STRING"}]},
             {"name": "Syllable", "type": "SEGMENT", "attributeDefinitions": [{"name": "Syllable", "type": "STRING"}]},
-            {"name": "Phonetic", "type": "SEGMENT", "attributeDefinitions": [{"name": "Phonetic", "type": "STRING"}]}],
-        "linkDefinitions": [{"type": "ONE_TO_MANY", "superlevelName": "Utterance", "sublevelName": "Syllable"},
-                            {"type": "ONE_TO_MANY", "superlevelName": "Syllable", "sublevelName": "Phonetic"}],
+            {"name": "Phonetic", "type": "SEGMENT", "attributeDefinitions": [{"name": "Phonetic", "type": "STRING"}]},
+        ],
+        "linkDefinitions": [
+            {"type": "ONE_TO_MANY", "superlevelName": "Utterance", "sublevelName": "Syllable"},
+            {"type": "ONE_TO_MANY", "superlevelName": "Syllable", "sublevelName": "Phonetic"},
+        ],
     }
     (db / "test_DBconfig.json").write_text(json.dumps(config))
     for ses, bs in bundles.items():
         for b, (phones, sylls, tt, ul) in bs.items():
             d = db / f"{ses}_ses" / f"{b}_bndl"
             d.mkdir(parents=True)
-            annot = {"name": b, "annotates": f"{b}.wav", "sampleRate": rate_annot, "levels": [
-                {"name": "Utterance", "type": "ITEM",
-                 "items": [{"id": 100, "labels": [{"name": "Utterance", "value": ""}]}]},
-                {"name": "Syllable", "type": "SEGMENT", "items": segment_items("Syllable", sylls, 200)},
-                {"name": "Phonetic", "type": "SEGMENT", "items": segment_items("Phonetic", phones, 300)}],
-                "links": [{"fromID": 100, "toID": 200}]}
+            annot = {
+                "name": b,
+                "annotates": f"{b}.wav",
+                "sampleRate": rate_annot,
+                "levels": [
+                    {
+                        "name": "Utterance",
+                        "type": "ITEM",
+                        "items": [{"id": 100, "labels": [{"name": "Utterance", "value": ""}]}],
+                    },
+                    {"name": "Syllable", "type": "SEGMENT", "items": segment_items("Syllable", sylls, 200)},
+                    {"name": "Phonetic", "type": "SEGMENT", "items": segment_items("Phonetic", phones, 300)},
+                ],
+                "links": [{"fromID": 100, "toID": 200}],
+            }
             (d / f"{b}_annot.json").write_text(json.dumps(annot))
-            (d / f"{b}.pos").write_bytes(ssff_bytes([("tt", "DOUBLE", 2, tt), ("ul", "FLOAT", 2, ul)], "200.0",
-                                                    start=start))
+            (d / f"{b}.pos").write_bytes(
+                ssff_bytes([("tt", "DOUBLE", 2, tt), ("ul", "FLOAT", 2, ul)], "200.0", start=start)
+            )
             (d / f"{b}.wav").write_bytes(b"RIFF")
     return db
 
 
-PHONES = [(0, 1999, "a"), (2000, 2999, "m"), (5000, 999, "")]   # 0.25 s at 20 kHz; last one a pause
+PHONES = [(0, 1999, "a"), (2000, 2999, "m"), (5000, 999, "")]  # 0.25 s at 20 kHz; last one a pause
 SYLLS = [(0, 4999, "am"), (5000, 999, "")]
 
 
@@ -158,7 +208,7 @@ def test_emudb_reads_phones_tracks_and_times_by_the_manuals_formulas(tmp_path):
 
 def test_emudb_level_choice(tmp_path):
     db = make_emudb(tmp_path, {"0000": {"b1": (PHONES, SYLLS, rows(60, 0.0), rows(60, 1.0))}})
-    assert load_corpus(db)[0].alignment.labels[:2] == ("a", "m")          # lowest SEGMENT level
+    assert load_corpus(db)[0].alignment.labels[:2] == ("a", "m")  # lowest SEGMENT level
     assert load_corpus(db, tier="Syllable")[0].alignment.labels[0] == "am"
     assert load_emu_corpus(db, level="Syllable")[0].alignment.labels[0] == "am"
     with pytest.raises(DataError, match=r"test_DBconfig.json: field 'level'.*'Word'"):
@@ -176,19 +226,30 @@ def test_ssff_start_time_is_put_on_the_frame_grid(tmp_path):
     grid = np.arange(u.n_frames) / 200.0
     np.testing.assert_allclose(u.trajectory[1:-1, 0], 1 + 4 * grid[1:-1])
     np.testing.assert_allclose(u.trajectory[1:-1, 1], 2 - grid[1:-1])
-    assert u.trajectory[0, 0] == pytest.approx(1 + 4 * 0.0025)   # before the first record: held
+    assert u.trajectory[0, 0] == pytest.approx(1 + 4 * 0.0025)  # before the first record: held
 
 
 def test_emu_webapp_bundle_documents(tmp_path):
     tt = rows(50, 5.0)
     blob = ssff_bytes([("tt", "DOUBLE", 2, tt)], "200.0")
-    annot = {"name": "b1", "annotates": "b1.wav", "sampleRate": 16000, "levels": [
-        {"name": "Phonetic", "type": "SEGMENT",
-         "items": segment_items("Phonetic", [(0, 1599, "x"), (1600, 2399, "y")])}],
-        "links": []}
-    doc = {"annotation": annot, "ssffFiles": [{"fileExtension": "pos", "encoding": "BASE64",
-                                               "data": base64.b64encode(blob).decode()}],
-           "mediaFile": {"encoding": "BASE64", "data": ""}}
+    annot = {
+        "name": "b1",
+        "annotates": "b1.wav",
+        "sampleRate": 16000,
+        "levels": [
+            {
+                "name": "Phonetic",
+                "type": "SEGMENT",
+                "items": segment_items("Phonetic", [(0, 1599, "x"), (1600, 2399, "y")]),
+            }
+        ],
+        "links": [],
+    }
+    doc = {
+        "annotation": annot,
+        "ssffFiles": [{"fileExtension": "pos", "encoding": "BASE64", "data": base64.b64encode(blob).decode()}],
+        "mediaFile": {"encoding": "BASE64", "data": ""},
+    }
     folder = tmp_path / "bundles"
     folder.mkdir()
     (folder / "b1_bndl.json").write_text(json.dumps(doc))
@@ -203,16 +264,27 @@ def test_emu_webapp_bundle_documents(tmp_path):
         load_corpus(folder)
 
 
-@pytest.mark.parametrize("change, field, value", [
-    (lambda a: a.pop("sampleRate"), "sampleRate", "None"),
-    (lambda a: a["levels"][0]["items"][1].update(sampleDur=-5), "level 'Phonetic' item 1 (id 2) sampleDur", "-5"),
-    (lambda a: a["levels"][0]["items"][0].update(labels=[{"name": "Other", "value": "q"}]),
-     "level 'Phonetic' item 0 (id 1) labels", "Other"),
-    (lambda a: a["levels"][0].update(type="SEGMENTS"), "levels[0] ('Phonetic') type", "SEGMENTS"),
-])
+@pytest.mark.parametrize(
+    "change, field, value",
+    [
+        (lambda a: a.pop("sampleRate"), "sampleRate", "None"),
+        (lambda a: a["levels"][0]["items"][1].update(sampleDur=-5), "level 'Phonetic' item 1 (id 2) sampleDur", "-5"),
+        (
+            lambda a: a["levels"][0]["items"][0].update(labels=[{"name": "Other", "value": "q"}]),
+            "level 'Phonetic' item 0 (id 1) labels",
+            "Other",
+        ),
+        (lambda a: a["levels"][0].update(type="SEGMENTS"), "levels[0] ('Phonetic') type", "SEGMENTS"),
+    ],
+)
 def test_malformed_annotation_is_refused(change, field, value):
-    annot = {"name": "b", "sampleRate": 16000, "levels": [
-        {"name": "Phonetic", "type": "SEGMENT", "items": segment_items("Phonetic", [(0, 99, "x"), (100, 99, "y")])}]}
+    annot = {
+        "name": "b",
+        "sampleRate": 16000,
+        "levels": [
+            {"name": "Phonetic", "type": "SEGMENT", "items": segment_items("Phonetic", [(0, 99, "x"), (100, 99, "y")])}
+        ],
+    }
     change(annot)
     with pytest.raises(DataError) as err:
         annot_alignment(annot, source="b_annot.json")
@@ -237,5 +309,5 @@ def test_format_can_be_forced_and_unknown_formats_are_named(tmp_path):
     assert load_corpus(db, format="emu")[0].name == "0000_b1"
     with pytest.raises(DataError, match=r"field 'format'.*'praat'"):
         load_corpus(db, format="praat")
-    with pytest.raises(DataError, match=r"field 'alignments'"):   # forced generic reader: no alignments here
+    with pytest.raises(DataError, match=r"field 'alignments'"):  # forced generic reader: no alignments here
         load_corpus(db, format="directory")

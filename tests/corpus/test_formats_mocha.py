@@ -1,4 +1,5 @@
 """MOCHA-TIMIT and mngu0 directories: EST tracks + xwaves labels, written here from their documentation."""
+
 import numpy as np
 import pytest
 
@@ -21,7 +22,7 @@ def mocha_dir(tmp_path, *, byte_orders=("01", "10"), n=250, breaks=()):
     raw = {}
     for k, order in enumerate(byte_orders):
         stem = f"fsew0_{k + 1:03d}"
-        v = np.round(rng.normal(0, 2000, size=(n, 20))).astype(np.float32)   # 1/100 mm, as MOCHA stores
+        v = np.round(rng.normal(0, 2000, size=(n, 20))).astype(np.float32)  # 1/100 mm, as MOCHA stores
         present = np.ones(n, bool)
         present[list(breaks)] = False
         write_est(tmp_path / f"{stem}.ema", v, frame_rate=500.0, byte_order=order, present=present)
@@ -84,5 +85,8 @@ def test_mngu0_keeps_header_names_mm_and_masks_breaks(tmp_path):
     assert c.channels == tuple(names) and c.frame_rate == 200.0
     np.testing.assert_array_equal(c[0].trajectory[c[0].mask], v.astype(float)[c[0].mask])
     assert not c[0].mask[50].any() and c[0].mask[49].all()
-    assert c.sensors == {"T1": ("T1_px", "T1_py", "T1_pz"), "T3": ("T3_py", "T3_pz"),
-                         "upperlip": ("upperlip_py", "upperlip_pz")}
+    assert c.sensors == {
+        "T1": ("T1_px", "T1_py", "T1_pz"),
+        "T3": ("T3_py", "T3_pz"),
+        "upperlip": ("upperlip_py", "upperlip_pz"),
+    }

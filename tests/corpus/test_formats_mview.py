@@ -1,4 +1,5 @@
 """Haskins IEEE rate comparison / mview .mat files, written here with scipy from the documented struct layout."""
+
 import numpy as np
 import pytest
 from scipy.io import savemat
@@ -6,8 +7,16 @@ from scipy.io import savemat
 from dam.corpus import DataError, load_corpus
 from dam.corpus.formats.mview import read_mview
 
-FIELDS = [("NAME", "O"), ("SRATE", "O"), ("SIGNAL", "O"), ("SOURCE", "O"), ("SENTENCE", "O"),
-          ("WORDS", "O"), ("PHONES", "O"), ("LABELS", "O")]
+FIELDS = [
+    ("NAME", "O"),
+    ("SRATE", "O"),
+    ("SIGNAL", "O"),
+    ("SOURCE", "O"),
+    ("SENTENCE", "O"),
+    ("WORDS", "O"),
+    ("PHONES", "O"),
+    ("LABELS", "O"),
+]
 SENSORS = ["TR", "TB", "TT", "UL", "LL", "ML", "JAW", "JAWL"]
 EMPTY = np.zeros((0, 0))
 
@@ -33,12 +42,12 @@ PHONES = [("sil", 0.0, 0.1), ("DH", 0.1, 0.16), ("AH0", 0.16, 0.3), ("sil", 0.3,
 def test_mview_reads_all_sensors_six_columns_and_phones(tmp_path):
     rng = np.random.default_rng(0)
     sig = {s: rng.normal(size=(50, 6)) for s in SENSORS}
-    sig["TT"][10:13, :] = np.nan                       # a dropout of the tongue tip sensor
+    sig["TT"][10:13, :] = np.nan  # a dropout of the tongue tip sensor
     write_mview(tmp_path / "F01_B01_S01_R01_N.mat", sig, PHONES)
     write_mview(tmp_path / "F01_B01_S02_R01_N.mat", {s: rng.normal(size=(50, 6)) for s in SENSORS}, PHONES)
     palate = np.zeros((1, 1), dtype=FIELDS)
     palate[0, 0] = ("PALATE", 100.0, np.ones((30, 3)), "", "", EMPTY, EMPTY, EMPTY)
-    savemat(str(tmp_path / "F01_palate.mat"), {"F01_palate": palate})   # no PHONES: skipped
+    savemat(str(tmp_path / "F01_palate.mat"), {"F01_palate": palate})  # no PHONES: skipped
     corpus = load_corpus(tmp_path)
     assert corpus.metadata["format"] == "mview" and corpus.metadata["length_unit"] == "mm"
     assert [u.name for u in corpus] == ["F01_B01_S01_R01_N", "F01_B01_S02_R01_N"]
@@ -57,14 +66,22 @@ def test_mview_reads_all_sensors_six_columns_and_phones(tmp_path):
     _, _, info = read_mview(tmp_path / "F01_B01_S01_R01_N.mat")
     assert info["words"][0][0] == "the" and info["words"][0][1:] == pytest.approx((0.1, 0.3))
     assert load_corpus(tmp_path, sensors=["TT", "UL"]).channels == tuple(
-        f"{s}_{c}" for s in ("TT", "UL") for c in ("px", "py", "pz", "ox", "oy", "oz"))
+        f"{s}_{c}" for s in ("TT", "UL") for c in ("px", "py", "pz", "ox", "oy", "oz")
+    )
 
 
-@pytest.mark.parametrize("change, field, value", [
-    (lambda sig, ph: ph.__setitem__(1, ("DH", 0.1, 0.05)), "segment 1 ('DH')", "0.1"),
-    (lambda sig, ph: sig.__setitem__("TB", np.zeros((40, 6))), "F.TB", "40 frames"),
-    (lambda sig, ph: sig.__setitem__("TB", np.array([["a", "b"], ["c", "d"]], dtype=object)), "F.TB.SIGNAL", "ndarray"),
-])
+@pytest.mark.parametrize(
+    "change, field, value",
+    [
+        (lambda sig, ph: ph.__setitem__(1, ("DH", 0.1, 0.05)), "segment 1 ('DH')", "0.1"),
+        (lambda sig, ph: sig.__setitem__("TB", np.zeros((40, 6))), "F.TB", "40 frames"),
+        (
+            lambda sig, ph: sig.__setitem__("TB", np.array([["a", "b"], ["c", "d"]], dtype=object)),
+            "F.TB.SIGNAL",
+            "ndarray",
+        ),
+    ],
+)
 def test_malformed_mview_is_refused(tmp_path, change, field, value):
     sig = {s: np.zeros((50, 6)) for s in ("TT", "TB")}
     ph = list(PHONES)
@@ -84,6 +101,7 @@ def test_not_a_mat_file_is_refused(tmp_path):
 
 def test_corpus_json_beside_a_distributed_corpus_sets_rate_and_sensors(tmp_path):
     import json
+
     write_mview(tmp_path / "F.mat", {s: np.zeros((50, 6)) for s in ("TT", "TB")}, PHONES)
     (tmp_path / "corpus.json").write_text(json.dumps({"frame_rate": 200, "sensors": {"tip": ["TT_px", "TT_pz"]}}))
     c = load_corpus(tmp_path)

@@ -1,4 +1,5 @@
 """Wisconsin X-ray microbeam .txy files, written here by hand from the handbook's layout (as wrassp reads it)."""
+
 import numpy as np
 import pytest
 
@@ -14,8 +15,8 @@ def txy_lines(n, *, lost=(), period=6866, seed=0):
     rng = np.random.default_rng(seed)
     um = rng.integers(-60000, 20000, size=(n, 16))
     for f, p in lost:
-        um[f, 2 * p:2 * p + 2] = M
-    um[0] = M   # the first frame of every file is the marker
+        um[f, 2 * p : 2 * p + 2] = M
+    um[0] = M  # the first frame of every file is the marker
     lines = ["\t".join(str(v) for v in (i * period, *um[i])) for i in range(n)]
     return lines, um
 
@@ -66,11 +67,14 @@ def test_write_txy_round_trip(tmp_path):
     assert p.read_text().splitlines()[1].split("\t")[0] == "6866"
 
 
-@pytest.mark.parametrize("edit, field, value", [
-    (lambda ls: ls.__setitem__(3, ls[3].rsplit("\t", 2)[0]), "line 4", "15"),
-    (lambda ls: ls.__setitem__(2, ls[2].replace("\t", "\t12.5x", 1)), "line 3", "12.5x"),
-    (lambda ls: ls.__setitem__(4, "100\t" + ls[4].split("\t", 1)[1]), "line 5 time", "100"),
-])
+@pytest.mark.parametrize(
+    "edit, field, value",
+    [
+        (lambda ls: ls.__setitem__(3, ls[3].rsplit("\t", 2)[0]), "line 4", "15"),
+        (lambda ls: ls.__setitem__(2, ls[2].replace("\t", "\t12.5x", 1)), "line 3", "12.5x"),
+        (lambda ls: ls.__setitem__(4, "100\t" + ls[4].split("\t", 1)[1]), "line 5 time", "100"),
+    ],
+)
 def test_malformed_txy_is_refused(tmp_path, edit, field, value):
     lines, _ = txy_lines(8)
     edit(lines)
@@ -94,7 +98,7 @@ def linear_txy(path, n, *, period=6866, slope=0.25, lost=()):
     t_us = np.arange(n) * period
     um = np.rint(np.outer(t_us * 1e-3 * slope, np.arange(1, 17)) + np.arange(16) * 1000).astype(np.int64)
     for f, p in lost:
-        um[f, 2 * p:2 * p + 2] = M
+        um[f, 2 * p : 2 * p + 2] = M
     path.write_text("\n".join("\t".join(str(v) for v in (t_us[i], *um[i])) for i in range(n)) + "\n")
     return t_us * 1e-6, um
 
@@ -131,7 +135,7 @@ def test_files_at_different_rates_need_frame_rate(tmp_path):
 def test_a_jittered_frame_keeps_the_nominal_rate(tmp_path):
     lines, um = txy_lines(30)
     parts = lines[12].split("\t")
-    parts[0] = str(12 * 6866 + 900)          # one frame 0.9 ms late
+    parts[0] = str(12 * 6866 + 900)  # one frame 0.9 ms late
     lines[12] = "\t".join(parts)
     (tmp_path / "j.txy").write_text("\n".join(lines) + "\n")
     tr = read_txy(tmp_path / "j.txy")

@@ -1,4 +1,5 @@
 """Corpus I/O: TextGrid (long and short), HTK .lab, CSV with time column, NPY; writers; bad input."""
+
 import json
 
 import numpy as np
@@ -6,10 +7,18 @@ import pytest
 
 import dam
 from dam import Alignment, DataError
-from dam.corpus.io import (load_corpus, read_alignment, read_lab, read_textgrid, save_corpus, write_csv, write_lab,
-                    write_textgrid)
+from dam.corpus.io import (
+    load_corpus,
+    read_alignment,
+    read_lab,
+    read_textgrid,
+    save_corpus,
+    write_csv,
+    write_lab,
+    write_textgrid,
+)
 
-LONG_TG = '''File type = "ooTextFile"
+LONG_TG = """File type = "ooTextFile"
 Object class = "TextGrid"
 
 xmin = 0
@@ -49,9 +58,9 @@ item []:
             xmin = 0.4
             xmax = 0.5
             text = "sp"
-'''
+"""
 
-SHORT_TG = '''File type = "ooTextFile"
+SHORT_TG = """File type = "ooTextFile"
 Object class = "TextGrid"
 
 0
@@ -72,7 +81,7 @@ Object class = "TextGrid"
 0.3
 0.5
 "iy"
-'''
+"""
 
 
 def test_long_textgrid_phones_tier_and_empty_pauses(tmp_path):
@@ -107,8 +116,10 @@ def test_htk_lab_units(tmp_path):
 
 def test_xwaves_lab_in_seconds(tmp_path):
     p = tmp_path / "mocha.lab"
-    p.write_text("signal msak0_001\nnfields 1\n#\n    0.0000 125 h#\n    0.1175 125 breath\n"
-                 "    0.2350 125 sil\n    0.3100 125 dh\n")
+    p.write_text(
+        "signal msak0_001\nnfields 1\n#\n    0.0000 125 h#\n    0.1175 125 breath\n"
+        "    0.2350 125 sil\n    0.3100 125 dh\n"
+    )
     a = read_lab(p)
     assert a.labels == ("breath", "sil", "dh")
     np.testing.assert_allclose(a.starts, [0, 0.1175, 0.235])
@@ -187,7 +198,6 @@ def test_npy_without_channel_names_uses_corpus_json(tmp_path):
     np.save(tmp_path / "u.npy", np.ones((50, 2)))
     with pytest.raises(DataError, match="frame rate is unknown"):
         load_corpus(tmp_path)
-    (tmp_path / "corpus.json").write_text(json.dumps({"frame_rate": 100, "channels": ["jaw", "lip"],
-                                                      "speaker": "m01"}))
+    (tmp_path / "corpus.json").write_text(json.dumps({"frame_rate": 100, "channels": ["jaw", "lip"], "speaker": "m01"}))
     c = load_corpus(tmp_path)
     assert c.channels == ("jaw", "lip") and c.metadata == {"speaker": "m01"}

@@ -1,4 +1,5 @@
 """Missing data: the per-frame, per-channel mask of an Utterance, through fitting and scoring."""
+
 import numpy as np
 import pytest
 
@@ -16,9 +17,9 @@ def masked_corpus(garbage: float | None, seed=0):
     utts = []
     for u in base:
         mask = np.ones(u.trajectory.shape, bool)
-        for _ in range(3):   # three dropouts of 2-6 frames in random channels
+        for _ in range(3):  # three dropouts of 2-6 frames in random channels
             j, i0 = rng.integers(u.n_channels), rng.integers(1, u.n_frames - 8)
-            mask[i0:i0 + rng.integers(2, 7), j] = False
+            mask[i0 : i0 + rng.integers(2, 7), j] = False
         y = np.array(u.trajectory)
         y[~mask] = np.nan if garbage is None else garbage
         utts.append(Utterance(u.alignment, y, u.frame_rate, u.channels, name=u.name, mask=mask))
@@ -42,7 +43,7 @@ def test_mask_validation():
         Utterance(u.alignment, u.trajectory, u.frame_rate, u.channels, mask=np.ones((3, 3), bool))
     y = np.array(u.trajectory)
     y[4, 1] = np.nan
-    with pytest.raises(DataError, match=r"trajectory\[4, 'lip_protrusion'\]"):   # NaN where observed
+    with pytest.raises(DataError, match=r"trajectory\[4, 'lip_protrusion'\]"):  # NaN where observed
         Utterance(u.alignment, y, u.frame_rate, u.channels)
     m = np.ones(y.shape, bool)
     m[4, 1] = False
@@ -70,7 +71,7 @@ def test_metrics_skip_masked_values():
     for j in range(3):
         assert rmse_per_channel(y, p, m)[j] == pytest.approx(np.sqrt(np.mean((y - p)[m[:, j], j] ** 2)))
         assert pearson_per_channel(y, p, m)[j] == pytest.approx(np.corrcoef(y[m[:, j], j], p[m[:, j], j])[0, 1])
-    q = np.where(m, p, 1e9)   # garbage in the prediction where the truth is missing
+    q = np.where(m, p, 1e9)  # garbage in the prediction where the truth is missing
     assert rmse(y, q, m) == rmse(y, p, m)
 
 
@@ -113,6 +114,7 @@ def test_phone_mean_averages_observed_values_only():
 def test_dam_estep_weights_equal_dropping_the_rows():
     """The weighted E-step solves the least squares with the masked rows deleted (dense closed form)."""
     from dam.model.estep import Occurrences, design_matrix, normal_equations, solve_normal_equations
+
     c = masked_corpus(0.0)
     glob = []
     phones = sorted(c.phones)
@@ -140,11 +142,12 @@ def test_dam_fit_skips_masked_frames():
     params = {"degree": 2, "max_iter": 3, "n_resample": 8}
     a = make("dam", **params).fit(c)
     b = make("dam", **params).fit(unmasked)
-    assert not np.allclose(a.coef_, b.coef_)   # skipping is not the same as fitting the interpolated values
+    assert not np.allclose(a.coef_, b.coef_)  # skipping is not the same as fitting the interpolated values
 
 
 def test_save_corpus_keeps_the_mask(tmp_path):
     from dam.corpus import load_corpus, save_corpus
+
     c = masked_corpus(None)
     save_corpus(c, tmp_path / "c", decimals=None)
     back = load_corpus(tmp_path / "c")

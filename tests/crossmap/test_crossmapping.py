@@ -1,4 +1,5 @@
 """NNLS cross-mapping (Chen et al. 2012, Appendix A): key shapes, blend weights, bounded controls."""
+
 import numpy as np
 import pytest
 
@@ -24,7 +25,7 @@ def test_known_blend_weights_recovered_exactly():
     rng = np.random.default_rng(1)
     L = rng.normal(size=(6, 40))
     alpha = rng.uniform(0, 2, size=(200, 6))
-    alpha[rng.random(alpha.shape) < 0.4] = 0.0       # many exact zeros: the NNLS active set
+    alpha[rng.random(alpha.shape) < 0.4] = 0.0  # many exact zeros: the NNLS active set
     w = blend_weights(alpha @ L, L)
     assert w.shape == (200, 6)
     np.testing.assert_allclose(w, alpha, atol=1e-10)
@@ -34,7 +35,7 @@ def test_known_blend_weights_recovered_exactly():
 def test_blend_weights_are_the_nnls_optimum_for_frames_outside_the_cone():
     rng = np.random.default_rng(2)
     L = rng.normal(size=(4, 12))
-    X = rng.normal(size=(30, 12))                     # not blends: some weights must hit zero
+    X = rng.normal(size=(30, 12))  # not blends: some weights must hit zero
     w = blend_weights(X, L)
     assert (w >= 0).all() and (w == 0).any()
     for x, wi in zip(X, w):
@@ -114,7 +115,7 @@ def test_nonlinear_rig_function_recovers_controls_and_respects_bounds():
     def f(c):
         return rig(c) + 0.3 * (np.asarray(c) ** 2) @ E
 
-    c = np.cumsum(rng.normal(scale=0.05, size=(40, 4)), axis=0) % 0.8 + 0.1   # a smooth-ish path in (0, 1)
+    c = np.cumsum(rng.normal(scale=0.05, size=(40, 4)), axis=0) % 0.8 + 0.1  # a smooth-ish path in (0, 1)
     est = fit_controls(np.array([f(ci) for ci in c]), f, n_controls=4)
     np.testing.assert_allclose(est, c, atol=1e-6)
     far = np.array([f(ci) for ci in rng.uniform(-1, 2, size=(10, 4))])
@@ -126,22 +127,24 @@ def _corpus(trajs, fr=100.0):
     utts = []
     for k, T in enumerate(trajs):
         n = len(T)
-        al = Alignment(["sil", "a", "sil"], [0, n / fr / 3, 2 * n / fr / 3], [n / fr / 3, 2 * n / fr / 3, n / fr],
-                       source=f"u{k}")
+        al = Alignment(
+            ["sil", "a", "sil"], [0, n / fr / 3, 2 * n / fr / 3], [n / fr / 3, 2 * n / fr / 3, n / fr], source=f"u{k}"
+        )
         utts.append(Utterance(al, T, fr, [f"d{j}" for j in range(T.shape[1])], name=f"u{k}"))
     return Corpus(utts, name="captured")
 
 
 def test_crossmapper_maps_a_corpus_to_controls_with_alignments_kept():
     rng = np.random.default_rng(14)
-    L = rng.normal(size=(3, 16))                          # captured key shapes
+    L = rng.normal(size=(3, 16))  # captured key shapes
     rig = _rig(seed=15, n_controls=4, n_dims=20)
-    C_k = rng.uniform(0, 1, size=(3, 4))                  # the artist's poses of the key shapes
+    C_k = rng.uniform(0, 1, size=(3, 4))  # the artist's poses of the key shapes
     V_k = rig(C_k)
-    alphas = [rng.dirichlet(np.ones(3), size=n) for n in (30, 45)]   # convex blends
+    alphas = [rng.dirichlet(np.ones(3), size=n) for n in (30, 45)]  # convex blends
     captured = _corpus([a @ L for a in alphas])
-    cm = CrossMapper(key_shapes=L, target_key_shapes=V_k, rig=LinearRig(rig.neutral, rig.deltas,
-                                                                        control_names=list("jklm")))
+    cm = CrossMapper(
+        key_shapes=L, target_key_shapes=V_k, rig=LinearRig(rig.neutral, rig.deltas, control_names=list("jklm"))
+    )
     out = cm.fit(captured).transform(captured)
     assert isinstance(out, Corpus) and out.channels == tuple("jklm")
     for u_in, u_out, a in zip(captured, out, alphas):
@@ -167,11 +170,14 @@ def test_crossmapper_without_target_returns_blend_weights():
         cm.set_params(control_names=["only"]).transform(frames)
 
 
-@pytest.mark.parametrize("bad, field", [
-    (lambda L: (np.where(np.arange(40).reshape(5, 8) == 11, np.nan, 1.0), L), "frames[1, 3]"),
-    (lambda L: (np.ones((5, 7)), L), "frames"),
-    (lambda L: (np.ones((5, 8)), np.ones((2, 3, 8))), "key_shapes"),
-])
+@pytest.mark.parametrize(
+    "bad, field",
+    [
+        (lambda L: (np.where(np.arange(40).reshape(5, 8) == 11, np.nan, 1.0), L), "frames[1, 3]"),
+        (lambda L: (np.ones((5, 7)), L), "frames"),
+        (lambda L: (np.ones((5, 8)), np.ones((2, 3, 8))), "key_shapes"),
+    ],
+)
 def test_bad_input_names_the_field(bad, field):
     L = np.eye(8)[:3]
     X, K = bad(L)
@@ -198,6 +204,7 @@ def test_bad_bounds_and_rig_are_errors():
 def test_cli_crossmap_writes_controls_and_names_bad_files(tmp_path, capsys):
     from dam.cli import main
     from dam.corpus.io import load_corpus, save_corpus
+
     rng = np.random.default_rng(17)
     L = rng.normal(size=(3, 8))
     rig = _rig(seed=18, n_controls=4, n_dims=10)
@@ -208,18 +215,43 @@ def test_cli_crossmap_writes_controls_and_names_bad_files(tmp_path, capsys):
     np.savetxt(tmp_path / "posed.csv", rig(C_k), delimiter=",")
     np.save(tmp_path / "deltas.npy", rig.deltas)
     np.save(tmp_path / "neutral.npy", rig.neutral)
-    args = ["-q", "crossmap", str(tmp_path / "captured"), "--key-shapes", str(tmp_path / "keys.npy"),
-            "--target-key-shapes", str(tmp_path / "posed.csv"), "--rig-deltas", str(tmp_path / "deltas.npy"),
-            "--rig-neutral", str(tmp_path / "neutral.npy"), "--control-names", "j,k,l,m",
-            "-o", str(tmp_path / "controls")]
+    args = [
+        "-q",
+        "crossmap",
+        str(tmp_path / "captured"),
+        "--key-shapes",
+        str(tmp_path / "keys.npy"),
+        "--target-key-shapes",
+        str(tmp_path / "posed.csv"),
+        "--rig-deltas",
+        str(tmp_path / "deltas.npy"),
+        "--rig-neutral",
+        str(tmp_path / "neutral.npy"),
+        "--control-names",
+        "j,k,l,m",
+        "-o",
+        str(tmp_path / "controls"),
+    ]
     assert main(args) == 0
     out = load_corpus(tmp_path / "controls")
     assert out.channels == tuple("jklm")
     for u, a in zip(out, alphas):
-        np.testing.assert_allclose(u.trajectory, a @ C_k, atol=1e-5)   # CSV keeps 6 decimals
+        np.testing.assert_allclose(u.trajectory, a @ C_k, atol=1e-5)  # CSV keeps 6 decimals
     # key shapes found and saved for the artist
-    assert main(["-q", "crossmap", str(tmp_path / "captured"), "--preference", "min",
-                 "--save-key-shapes", str(tmp_path / "found.csv")]) == 0
+    assert (
+        main(
+            [
+                "-q",
+                "crossmap",
+                str(tmp_path / "captured"),
+                "--preference",
+                "min",
+                "--save-key-shapes",
+                str(tmp_path / "found.csv"),
+            ]
+        )
+        == 0
+    )
     assert np.loadtxt(tmp_path / "found.csv", delimiter=",", ndmin=2).shape[1] == 8
     # a key-shape file of the wrong width: the error names the file and the field
     np.save(tmp_path / "bad.npy", np.ones((3, 7)))
@@ -232,25 +264,33 @@ def test_transform_before_fit_is_a_not_fitted_error():
     from dam import NotFittedError
     from dam.crossmap.landmarks import LandmarkSolver
     from dam.crossmap.retarget import RigSpaceRetargeter
+
     for est in (CrossMapper(), RigSpaceRetargeter(), LandmarkSolver(rig=np.eye(2))):
         with pytest.raises(NotFittedError, match=f"{type(est).__name__} is not fitted"):
             est.transform(np.ones((3, 2)))
 
 
-@pytest.mark.parametrize("cls, bad", [("CrossMapper", {"damping": 1.5}), ("CrossMapper", {"max_iter": 0}),
-                                      ("RigSpaceRetargeter", {"n_modes": 0}),
-                                      ("LandmarkSolver", {"alpha": -1.0})])
+@pytest.mark.parametrize(
+    "cls, bad",
+    [
+        ("CrossMapper", {"damping": 1.5}),
+        ("CrossMapper", {"max_iter": 0}),
+        ("RigSpaceRetargeter", {"n_modes": 0}),
+        ("LandmarkSolver", {"alpha": -1.0}),
+    ],
+)
 def test_crossmap_estimators_follow_dams_one_contract(cls, bad):
     """One estimator framework: the cross-mapping transformers are dam Estimators (declared
     constraints, get/set_params, dam.clone), not a second, scikit-learn-based one."""
     import dam
     from dam.base import Estimator, InvalidParameterError, Transformer
+
     klass = getattr(dam.crossmap, cls)
     assert issubclass(klass, Transformer) and issubclass(klass, Estimator)
     assert not any(c.__module__.startswith("sklearn") for c in klass.__mro__)
     est = klass(**bad)
     assert dam.clone(est).get_params() == est.get_params()
-    (name, value), = bad.items()
+    ((name, value),) = bad.items()
     frames = np.random.default_rng(0).normal(size=(30, 6))
     with pytest.raises(InvalidParameterError, match=name):
         est.fit(frames)

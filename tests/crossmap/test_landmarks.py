@@ -1,9 +1,16 @@
 """Landmark-to-rig solve (Medina et al. 2022, Sec. 7, Eqs. 2-4)."""
+
 import numpy as np
 import pytest
 
 from dam import Alignment, Corpus, DataError, Utterance
-from dam.crossmap.landmarks import LandmarkSolver, landmark_targets, similarity_transform, solve_landmarks, tied_parameters
+from dam.crossmap.landmarks import (
+    LandmarkSolver,
+    landmark_targets,
+    similarity_transform,
+    solve_landmarks,
+    tied_parameters,
+)
 from dam.crossmap.rig import LinearRig
 
 
@@ -48,7 +55,7 @@ def test_nonlinear_rig_with_jacobian_recovers_parameters():
 
 def test_l1_prior_gives_sparser_solutions_than_none():
     rng = np.random.default_rng(5)
-    rig = LinearRig(np.zeros(4), rng.normal(size=(10, 4)))      # 10 parameters, 4 coordinates: redundant
+    rig = LinearRig(np.zeros(4), rng.normal(size=(10, 4)))  # 10 parameters, 4 coordinates: redundant
     theta = np.zeros((30, 10))
     for t in range(30):
         theta[t, rng.choice(10, 2, replace=False)] = rng.uniform(0.3, 0.8, 2)
@@ -56,29 +63,29 @@ def test_l1_prior_gives_sparser_solutions_than_none():
     sparse, info1 = solve_landmarks(rig(theta), rig, alpha=0.01, return_info=True)
     nnz0, nnz1 = (dense > 1e-4).sum(1), (sparse > 1e-4).sum(1)
     assert nnz1.mean() < nnz0.mean() - 1
-    assert nnz1.max() <= 4 < nnz0.max()           # an L1 optimum is a vertex: at most n_coords non-zeros
-    assert np.abs(sparse).sum(1).mean() < np.abs(dense).sum(1).mean()   # smaller L1 norm
-    assert info0["pose_error"].max() < 1e-10 and info1["pose_error"].max() < 1e-2   # both fit the landmarks
+    assert nnz1.max() <= 4 < nnz0.max()  # an L1 optimum is a vertex: at most n_coords non-zeros
+    assert np.abs(sparse).sum(1).mean() < np.abs(dense).sum(1).mean()  # smaller L1 norm
+    assert info0["pose_error"].max() < 1e-10 and info1["pose_error"].max() < 1e-2  # both fit the landmarks
 
 
 def test_symmetric_tying_fills_in_the_unseen_side():
     # parameters: left_open, right_open, tongue; the landmarks see only the right side (as the paper's sensors)
     rng = np.random.default_rng(6)
     deltas = rng.normal(size=(3, 8))
-    deltas[0] = 0.0                                   # left_open moves no observed landmark
+    deltas[0] = 0.0  # left_open moves no observed landmark
     rig = LinearRig(np.zeros(8), deltas)
     theta = _path(7, 20, 3)
-    theta[:, 0] = theta[:, 1]                         # a symmetric face
+    theta[:, 0] = theta[:, 1]  # a symmetric face
     free = solve_landmarks(rig(theta), rig, alpha=0.01)
     tied = solve_landmarks(rig(theta), rig, alpha=0.01, symmetric_pairs=[(0, 1)])
-    assert np.abs(free[:, 0]).max() < 1e-8            # the prior keeps the unseen side shut
+    assert np.abs(free[:, 0]).max() < 1e-8  # the prior keeps the unseen side shut
     np.testing.assert_array_equal(tied[:, 0], tied[:, 1])
     np.testing.assert_allclose(tied, theta, atol=0.01)
 
 
 def test_signed_parameters_are_split_exactly():
     rig = _rig(seed=8)
-    theta = _path(9, 20, 5) * 2 - 1                   # in (-0.8, 0.8)
+    theta = _path(9, 20, 5) * 2 - 1  # in (-0.8, 0.8)
     np.testing.assert_allclose(solve_landmarks(rig(theta), rig, alpha=0.0, bounds=(-1, 1)), theta, atol=1e-6)
     M, lo, hi, cost = tied_parameters(2, ([-1, 0], [1, 1]))
     assert M.shape == (2, 3) and list(cost) == [1, 1, 1]
@@ -87,7 +94,7 @@ def test_signed_parameters_are_split_exactly():
 
 def test_frames_are_warm_started_from_the_previous_frame():
     rig = _rig(seed=10)
-    theta = np.repeat(_path(11, 1, 5), 3, axis=0)     # the same pose three times
+    theta = np.repeat(_path(11, 1, 5), 3, axis=0)  # the same pose three times
     _, info = solve_landmarks(rig(theta), rig, alpha=0.0, return_info=True)
     assert info["n_iter"][0] > 3 and info["n_iter"][1:].max() <= 1
 
@@ -141,12 +148,29 @@ def test_bad_input_is_an_error_naming_the_field():
 def test_cli_rigsolve(tmp_path):
     from dam.cli import main
     from dam.corpus.io import load_corpus, save_corpus
+
     rig = LinearRig(np.random.default_rng(17).normal(size=8), np.random.default_rng(18).normal(size=(3, 8)))
     theta = _path(19, 30, 3)
     al = Alignment(["sil", "a"], [0, 0.1], [0.1, 0.3])
     save_corpus(Corpus([Utterance(al, rig(theta), 100.0, [f"l{k}" for k in range(8)], name="u")]), tmp_path / "lm")
     np.save(tmp_path / "d.npy", rig.deltas)
     np.save(tmp_path / "n.npy", rig.neutral)
-    assert main(["-q", "rigsolve", str(tmp_path / "lm"), "--rig-deltas", str(tmp_path / "d.npy"), "--rig-neutral",
-                 str(tmp_path / "n.npy"), "--alpha", "0", "-o", str(tmp_path / "out")]) == 0
+    assert (
+        main(
+            [
+                "-q",
+                "rigsolve",
+                str(tmp_path / "lm"),
+                "--rig-deltas",
+                str(tmp_path / "d.npy"),
+                "--rig-neutral",
+                str(tmp_path / "n.npy"),
+                "--alpha",
+                "0",
+                "-o",
+                str(tmp_path / "out"),
+            ]
+        )
+        == 0
+    )
     np.testing.assert_allclose(load_corpus(tmp_path / "out")[0].trajectory, theta, atol=1e-5)

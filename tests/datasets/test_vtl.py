@@ -1,4 +1,5 @@
 """The VocalTractLab corpus generator and the bundled ``vtl`` corpus."""
+
 import json
 import subprocess
 import sys
@@ -11,8 +12,8 @@ pytest.importorskip("vocaltractlab_cython")
 
 import dam.datasets  # noqa: E402
 from dam.corpus.data import SILENCE, Alignment, DataError, fit_to_frames  # noqa: E402
-from dam.datasets import vtl  # noqa: E402
 from dam.corpus.io import load_corpus  # noqa: E402
+from dam.datasets import vtl  # noqa: E402
 
 # Words without plosives and nasals: VTL times every oral closure by search
 # (about 0.5 s of CPU each), these synthesize in milliseconds.
@@ -37,8 +38,38 @@ def _mid(alignment, k, traj, channel):
 
 
 # -- symbols ----------------------------------------------------------------
-@pytest.mark.parametrize("symbol", ["a:", "I", "E", "O", "U", "Y", "9", "@", "6", "aI", "aU", "OY", "I6",
-                                    "f", "v", "s", "z", "S", "C", "j", "x", "R", "h", "l", "?", "m", "t"])
+@pytest.mark.parametrize(
+    "symbol",
+    [
+        "a:",
+        "I",
+        "E",
+        "O",
+        "U",
+        "Y",
+        "9",
+        "@",
+        "6",
+        "aI",
+        "aU",
+        "OY",
+        "I6",
+        "f",
+        "v",
+        "s",
+        "z",
+        "S",
+        "C",
+        "j",
+        "x",
+        "R",
+        "h",
+        "l",
+        "?",
+        "m",
+        "t",
+    ],
+)
 def test_symbols_vtl_knows_make_gestures(symbol):
     assert symbol in vtl.VTL_PHONEMES
     assert vtl.probe_vtl_symbol(symbol)
@@ -59,8 +90,7 @@ def test_map_phones_maps_lax_vowels_and_rejects_unknown():
 def test_unknown_symbol_stops_generation_before_synthesis(tmp_path):
     lexicon = FAST + [vtl.Word("Wetter", ("w", "e", "t", "6"), (0.08, 0.1, 0.08, 0.1))]
     with pytest.raises(DataError, match=r"Wetter.*phone 0.*drop it silently.*got 'w'"):
-        vtl.generate_vtl_corpus(tmp_path, lexicon=lexicon, n_train_minutes=0.01, n_test_minutes=0.01,
-                                verbose=0)
+        vtl.generate_vtl_corpus(tmp_path, lexicon=lexicon, n_train_minutes=0.01, n_test_minutes=0.01, verbose=0)
     assert not (tmp_path / "train").exists()
 
 
@@ -118,15 +148,24 @@ def test_audio_is_16khz_and_as_long_as_the_alignment():
     res = vtl.synthesize_phrase(_plan(["", "a:", ""], [0.05, 0.2, 0.05], audio=True))
     wav, a = res["audio"], res["alignment"]
     assert wav.dtype == np.int16 and len(wav) == int(np.ceil(a.duration * 16000))
-    vowel = wav[int(0.1 * 16000):int(0.2 * 16000)].astype(float)
-    assert np.sqrt(np.mean(vowel ** 2)) > 300  # voiced, not silence
+    vowel = wav[int(0.1 * 16000) : int(0.2 * 16000)].astype(float)
+    assert np.sqrt(np.mean(vowel**2)) > 300  # voiced, not silence
 
 
 # -- generation ---------------------------------------------------------------------
 def _generate(out, seed, n_jobs):
-    return vtl.generate_vtl_corpus(out, seed=seed, lexicon=FAST, n_train_minutes=0.04, n_test_minutes=0.02,
-                                   test_word_fraction=0.34, audio_fraction=0.0, n_jobs=n_jobs, verbose=0,
-                                   words_per_phrase=(2, 3))
+    return vtl.generate_vtl_corpus(
+        out,
+        seed=seed,
+        lexicon=FAST,
+        n_train_minutes=0.04,
+        n_test_minutes=0.02,
+        test_word_fraction=0.34,
+        audio_fraction=0.0,
+        n_jobs=n_jobs,
+        verbose=0,
+        words_per_phrase=(2, 3),
+    )
 
 
 def _files(root):
@@ -155,8 +194,15 @@ def test_generation_is_deterministic_and_reloads(tmp_path):
 def test_phrases_do_not_depend_on_what_the_process_synthesized_before():
     # What makes the corpus independent of n_jobs: all randomness is in the plan, and VTL
     # (global state in its C library) gives a phrase the same trajectory whatever ran before it.
-    plans, _ = vtl.plan_corpus(seed=3, lexicon=FAST, n_train_minutes=0.04, n_test_minutes=0.01,
-                               test_word_fraction=0.34, audio_fraction=0.0, words_per_phrase=(2, 3))
+    plans, _ = vtl.plan_corpus(
+        seed=3,
+        lexicon=FAST,
+        n_train_minutes=0.04,
+        n_test_minutes=0.01,
+        test_word_fraction=0.34,
+        audio_fraction=0.0,
+        words_per_phrase=(2, 3),
+    )
     phrases = plans["train"] + plans["test"]
     assert len(phrases) >= 3
     forward = [vtl.synthesize_phrase(p)["trajectory"] for p in phrases]
@@ -177,13 +223,15 @@ def test_failed_plan_leaves_an_existing_corpus_alone(tmp_path):
     before = _files(tmp_path)
     bad = FAST + [vtl.Word("Wetter", ("w", "e", "t", "6"), (0.08, 0.1, 0.08, 0.1))]
     with pytest.raises(DataError, match="Wetter"):
-        vtl.generate_vtl_corpus(tmp_path, lexicon=bad, overwrite=True, n_train_minutes=0.01,
-                                n_test_minutes=0.01, verbose=0)
+        vtl.generate_vtl_corpus(
+            tmp_path, lexicon=bad, overwrite=True, n_train_minutes=0.01, n_test_minutes=0.01, verbose=0
+        )
     assert _files(tmp_path) == before
 
 
 def test_generate_errors_are_one_line(capsys):
     from dam.cli import main
+
     assert main(["generate-vtl", "unused", "--frame-rate", "500"]) == 1
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "frame_rate" in err and "500" in err
@@ -201,12 +249,14 @@ def test_another_seed_draws_other_phrases():
     def plans(seed):
         rng = np.random.default_rng(seed)
         return vtl.plan_phrases(FAST, minutes=0.1, rng=rng)
+
     assert plans(5) == plans(5) and plans(5) != plans(6)
 
 
 def test_generate_help_runs():
-    out = subprocess.run([sys.executable, "-m", "dam.cli", "generate-vtl", "--help"],
-                         capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-m", "dam.cli", "generate-vtl", "--help"], capture_output=True, text=True, check=True
+    )
     assert "--seed" in out.stdout and "--train-minutes" in out.stdout
 
 
@@ -230,6 +280,7 @@ def test_bundled_corpus_size_and_format(bundled):
 
 def test_bundled_corpus_splits_words_and_has_some_audio(bundled):
     import soundfile
+
     train, test = bundled
     words = [{w for u in c.metadata["utterances"].values() for w in u["words"]} for c in (train, test)]
     assert words[0] and words[1] and not words[0] & words[1]
@@ -237,12 +288,12 @@ def test_bundled_corpus_splits_words_and_has_some_audio(bundled):
     with_audio = [u for c in (train, test) for u in c if u.audio]
     for u in with_audio[:3]:
         wav, rate = soundfile.read(u.audio, dtype="int16")
-        assert rate == 16000   # the audio spans the frames: to the last frame time, at most one frame more
+        assert rate == 16000  # the audio spans the frames: to the last frame time, at most one frame more
         assert u.alignment.duration * 16000 <= len(wav) <= u.n_frames / u.frame_rate * 16000 + 1
         # Speech where the alignment has phones, near-silence in the leading pause.
-        lead = wav[:int(0.8 * u.alignment.ends[0] * 16000)].astype(float)
-        speech = wav[int(u.alignment.ends[0] * 16000):int(u.alignment.starts[-1] * 16000)].astype(float)
-        assert np.sqrt(np.mean(speech ** 2)) > 10 * np.sqrt(np.mean(lead ** 2)) + 100
+        lead = wav[: int(0.8 * u.alignment.ends[0] * 16000)].astype(float)
+        speech = wav[int(u.alignment.ends[0] * 16000) : int(u.alignment.starts[-1] * 16000)].astype(float)
+        assert np.sqrt(np.mean(speech**2)) > 10 * np.sqrt(np.mean(lead**2)) + 100
 
 
 def test_bundled_corpus_is_what_the_regenerate_command_plans(bundled):
@@ -251,8 +302,9 @@ def test_bundled_corpus_is_what_the_regenerate_command_plans(bundled):
         assert [p.name for p in plans[split]] == [u.name for u in corpus]
         for p, u in zip(plans[split], corpus):
             ends = np.round(np.cumsum(p.durations), 3)
-            assert u.alignment == fit_to_frames(Alignment(p.labels, ends - np.asarray(p.durations), ends),
-                                               u.n_frames, u.frame_rate)
+            assert u.alignment == fit_to_frames(
+                Alignment(p.labels, ends - np.asarray(p.durations), ends), u.n_frames, u.frame_rate
+            )
             assert corpus.metadata["utterances"][u.name]["words"] == list(p.words)
             if p.audio:  # the generator's share; `dam vtl-audio` adds more phrases, never fewer
                 assert u.audio

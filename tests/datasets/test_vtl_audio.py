@@ -1,5 +1,6 @@
 """Audio in corpora (issue 15): FLAC/WAV beside the trajectories, sample rates checked, and the
 bundled vtl corpus's audio: present where corpus.json says, and reproduced bit for bit by VTL."""
+
 import json
 import shutil
 
@@ -24,7 +25,7 @@ def test_audio_priority_is_a_nested_evenly_spread_order(n):
         gaps = np.diff([*chosen, chosen[0] + n])
         assert gaps.max() <= 2 * np.ceil(n / k), (k, chosen)
     first = [5 % n, 3 % n]
-    assert audio_priority(n, first)[:len(set(first))] == list(dict.fromkeys(first))
+    assert audio_priority(n, first)[: len(set(first))] == list(dict.fromkeys(first))
 
 
 def test_flac_and_wav_headers_agree_with_libsndfile(tmp_path):

@@ -1,4 +1,5 @@
 """dam.compare: statistics against scipy and by hand, the files it writes, the CLI."""
+
 import csv
 
 import numpy as np
@@ -32,6 +33,7 @@ def test_scores_agree_with_scipy(result, corpora):
     from scipy.stats import pearsonr, wilcoxon
 
     from baselines.reference import PhoneMean, TargetInterpolation
+
     train, test = corpora
     truth = np.concatenate(test.trajectories)
     utt = {}
@@ -101,6 +103,7 @@ def test_cross_validation_scores_every_utterance_once(corpora):
 
 def test_failed_model_is_reported_not_raised(corpora):
     from baselines.reference import PhoneMean
+
     train, test = corpora
 
     class Diverges(PhoneMean):
@@ -114,6 +117,7 @@ def test_failed_model_is_reported_not_raised(corpora):
 
 def test_bad_parameters_are_refused_before_any_fit(corpora):
     import dam
+
     train, test = corpora
     with pytest.raises(dam.InvalidParameterError, match="PhoneMean: parameter 'unknown_phone' is 'guess'"):
         compare([("bad", "phone-mean", {"unknown_phone": "guess"}), "phone-mean"], train, test, verbose=0)
@@ -121,8 +125,20 @@ def test_bad_parameters_are_refused_before_any_fit(corpora):
 
 def test_cli_compare(tmp_path, capsys):
     from dam.cli import main
-    code = main(["compare", "--models", "phone-mean,tree=dtree", "-p", "tree.max_depth=4", "--train", "tiny",
-                 "--out", str(tmp_path)])
+
+    code = main(
+        [
+            "compare",
+            "--models",
+            "phone-mean,tree=dtree",
+            "-p",
+            "tree.max_depth=4",
+            "--train",
+            "tiny",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert code == 0
     out = capsys.readouterr().out
     assert "| tree |" in out and "| phone-mean |" in out
@@ -133,10 +149,17 @@ def test_cli_compare(tmp_path, capsys):
 
 def test_test_corpus_at_another_frame_rate_is_refused(corpora):
     from dam.corpus.data import Corpus, Utterance
+
     train, test = corpora
     fr = 2 * test.frame_rate
-    other = Corpus([Utterance(u.alignment, np.zeros((u.alignment.n_frames(fr), test.n_channels)), fr,
-                              test.channels, name=u.name) for u in test])
+    other = Corpus(
+        [
+            Utterance(
+                u.alignment, np.zeros((u.alignment.n_frames(fr), test.n_channels)), fr, test.channels, name=u.name
+            )
+            for u in test
+        ]
+    )
     with pytest.raises(ValueError, match="frame rates differ"):
         compare(["phone-mean"], train, other, verbose=0)
 
@@ -144,6 +167,7 @@ def test_test_corpus_at_another_frame_rate_is_refused(corpora):
 def test_the_four_steps_and_the_progress_callback(corpora):
     """plan_comparison -> run_tasks -> score_results is compare(); progress sees every task once."""
     from dam.evaluation.compare import ModelScore, TaskResult, plan_comparison, run_tasks, score_results
+
     train, _ = corpora
     models = ["phone-mean", "target-interpolation"]
     plan = plan_comparison(models, train, cv=2)

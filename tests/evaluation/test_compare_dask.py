@@ -10,6 +10,7 @@ A lab runs the same comparison on its cluster with::
 
 Here the cluster is a ``dask.distributed.LocalCluster`` of two worker processes.
 """
+
 import joblib
 import numpy as np
 import pytest
@@ -27,8 +28,10 @@ def _table(res):
 @pytest.mark.filterwarnings("ignore::dam.base.ConvergenceWarning")
 def test_compare_on_a_dask_local_cluster_equals_the_local_run():
     local = dam.compare(MODELS, "tiny", cv=2, verbose=0)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
+    with (
+        LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
+        Client(cluster) as client,
+    ):
         with get_task_stream(client) as stream, joblib.parallel_config(backend="dask"):
             spread = dam.compare(MODELS, "tiny", cv=2, verbose=0, n_jobs=-1)
         # every fit (3 models x 2 folds) ran as a task on the cluster's worker processes

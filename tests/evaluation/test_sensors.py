@@ -1,4 +1,5 @@
 """Sensors (x/y(/z) channel groups) and Medina et al.'s (2022) Eq. 1 in evaluate, `dam evaluate` and `dam compare`."""
+
 import json
 
 import numpy as np
@@ -20,7 +21,7 @@ def test_sensor_names_of_the_corpora_read():
     assert infer_sensors(["T1_py", "T1_pz"]) == {"T1": ("T1_py", "T1_pz")}
     assert infer_sensors(["MNI_x", "MNI_y"]) == {"MNI": ("MNI_x", "MNI_y")}
     assert infer_sensors(["HX", "HY", "JX", "JA", "TTX", "TTY", "TS1"]) == {"H": ("HX", "HY"), "TT": ("TTX", "TTY")}
-    assert infer_sensors(["a_x", "a_px", "b_y", "b_x"]) == {"b": ("b_x", "b_y")}     # two x's: no sensor
+    assert infer_sensors(["a_x", "a_px", "b_y", "b_x"]) == {"b": ("b_x", "b_y")}  # two x's: no sensor
     assert infer_sensors(["jaw_open", "lip_aperture"]) == {}
 
 
@@ -39,7 +40,7 @@ def test_medina_eq1_closed_form():
     # prediction = truth + a fixed offset per sensor: the distance is the offset's length at every frame
     rng = np.random.default_rng(0)
     y = rng.normal(size=(30, 5))
-    offsets = {(0, 1): (3.0, 4.0), (2, 3, 4): (1.0, 2.0, 2.0)}   # lengths 5 and 3
+    offsets = {(0, 1): (3.0, 4.0), (2, 3, 4): (1.0, 2.0, 2.0)}  # lengths 5 and 3
     p = y.copy()
     for cols, off in offsets.items():
         p[:, list(cols)] += off
@@ -68,7 +69,7 @@ def two_utterance_corpus(offsets, lengths=(40, 120), metadata=None):
 def test_evaluate_reports_eq1_per_sensor_and_overall():
     corpus, preds = two_utterance_corpus([(0.3, 0.4), (0.6, 0.8)], metadata={"length_unit": "mm"})
     ev = evaluate(None, corpus, predictions=preds)
-    assert ev.sensors == {"tt": ("tt_x", "tt_y")}           # jaw and ll_y alone are no sensor
+    assert ev.sensors == {"tt": ("tt_x", "tt_y")}  # jaw and ll_y alone are no sensor
     assert [r["sensor_error"] for r in ev.per_utterance] == pytest.approx([0.5, 1.0])
     # overall: the mean of the per-utterance errors (the paper's mean sample error), not frame-weighted
     assert ev.sensor_error == pytest.approx(0.75)

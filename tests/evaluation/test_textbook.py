@@ -1,5 +1,6 @@
 """Textbook figures (issue 18): a typed phone sequence, its dominance functions and their weighted sum,
 the same sequence under several models; every figure has a title and non-empty axis labels."""
+
 import warnings
 
 import numpy as np
@@ -15,14 +16,22 @@ def fitted():
     train = dam.datasets.load("tiny")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", dam.base.ConvergenceWarning)  # a short fit is enough to draw
-        return train, {"phone-mean": dam.make("phone-mean").fit(train),
-                       "dam": dam.make("dam", degree=2, max_iter=3).fit(train)}
+        return train, {
+            "phone-mean": dam.make("phone-mean").fit(train),
+            "dam": dam.make("dam", degree=2, max_iter=3).fit(train),
+        }
 
 
 def _data_axes(fig):
     """Panels with data (not the phone tiers, whose y axis is "phones")."""
-    return [ax for ax in fig.axes if ax.get_visible() and (ax.lines or ax.collections or ax.patches)
-            and ax.get_ylabel() != "phones" and not ax.get_label() == "<colorbar>"]
+    return [
+        ax
+        for ax in fig.axes
+        if ax.get_visible()
+        and (ax.lines or ax.collections or ax.patches)
+        and ax.get_ylabel() != "phones"
+        and not ax.get_label() == "<colorbar>"
+    ]
 
 
 def _labelled(fig):
@@ -68,8 +77,11 @@ def test_dominance_sum_draws_eq1_and_the_weighted_average(fitted):
     r = rows[0]
     sigma = model.modes_of(r["phone"])["sigma"][r["mode"], 1]
     tl = (t - r["start"]) / (r["end"] - r["start"])
-    d = np.where(tl < 0, np.exp(-tl ** 2 / (sigma ** 2 + model.eps)),
-                 np.where(tl > 1, np.exp(-(tl - 1) ** 2 / (sigma ** 2 + model.eps)), 1.0))
+    d = np.where(
+        tl < 0,
+        np.exp(-(tl**2) / (sigma**2 + model.eps)),
+        np.where(tl > 1, np.exp(-((tl - 1) ** 2) / (sigma**2 + model.eps)), 1.0),
+    )
     d[d < model.dominance_tol] = 0.0
     np.testing.assert_allclose(curves[0].get_ydata(), d, atol=1e-12)
     # the stacked shares sum to one at every instant
@@ -83,8 +95,9 @@ def test_dominance_sum_draws_eq1_and_the_weighted_average(fitted):
 def test_sequence_under_several_models(fitted):
     train, models = fitted
     u = train[3]
-    fig = plot_sequence(models, u.alignment, ["jaw_open", "tongue_tip"], truth=u.trajectory,
-                        metadata=train.metadata, name=u.name)
+    fig = plot_sequence(
+        models, u.alignment, ["jaw_open", "tongue_tip"], truth=u.trajectory, metadata=train.metadata, name=u.name
+    )
     _labelled(fig)
     panels = _data_axes(fig)
     assert len([ax for ax in panels if ax.get_title() in models]) == 2
@@ -101,21 +114,38 @@ def test_sequence_under_several_models(fitted):
 def test_every_figure_function_has_labelled_axes(fitted, tmp_path):
     """Every figure function of the toolkit returns a figure with a title and non-empty axis labels."""
     from dam.model import figures as mf
+
     train, models = fitted
     m, u = models["dam"], train[0]
     phones = mf.inspected_phones(m, 2)
-    figs = [mf.plot_dominance(m, u, 0, metadata=train.metadata), mf.plot_animemes(m, phones, 0),
-            mf.plot_modes(m, phones, 0), mf.plot_astar(m, u.alignment),
-            plot_dominance_sum(m, u.alignment), plot_sequence(models, u.alignment)]
+    figs = [
+        mf.plot_dominance(m, u, 0, metadata=train.metadata),
+        mf.plot_animemes(m, phones, 0),
+        mf.plot_modes(m, phones, 0),
+        mf.plot_astar(m, u.alignment),
+        plot_dominance_sum(m, u.alignment),
+        plot_sequence(models, u.alignment),
+    ]
     from dam.evaluation.figures import plot_predictions, plot_rmse
-    ex = {"utterance": u.name, "frame_rate": train.frame_rate, "channels": list(train.channels),
-          "truth": u.trajectory, "alignment": u.alignment,
-          "predictions": {k: v.predict(u.alignment) for k, v in models.items()}}
-    summary = [{"model": k, "status": "ok", "rmse": 0.1 * (i + 1), "rmse_ci_low": 0.05, "rmse_ci_high": 0.3}
-               for i, k in enumerate(models)]
+
+    ex = {
+        "utterance": u.name,
+        "frame_rate": train.frame_rate,
+        "channels": list(train.channels),
+        "truth": u.trajectory,
+        "alignment": u.alignment,
+        "predictions": {k: v.predict(u.alignment) for k, v in models.items()},
+    }
+    summary = [
+        {"model": k, "status": "ok", "rmse": 0.1 * (i + 1), "rmse_ci_low": 0.05, "rmse_ci_high": 0.3}
+        for i, k in enumerate(models)
+    ]
     figs.append(plot_predictions(ex, summary))
-    figs.append(plot_rmse(summary, [{"model": k, "channel": c, "rmse": 0.1} for k in models for c in train.channels],
-                          best="dam"))
+    figs.append(
+        plot_rmse(
+            summary, [{"model": k, "channel": c, "rmse": 0.1} for k in models for c in train.channels], best="dam"
+        )
+    )
     for fig in figs:
         _labelled(fig)
         dam.plotting.pyplot().close(fig)

@@ -1,5 +1,6 @@
 """Every example runs on the tiny settings (--quick), writes only where the user says (by default
 ./dam-examples/<name>/, which git ignores), and every figure it saves follows dam.plotting's rules."""
+
 import importlib.util
 import subprocess
 from pathlib import Path
@@ -41,9 +42,18 @@ EXPECTED = {
     "dam_inspect": {"dam_dominance.png", "dam_animemes.png", "dam_modes.png", "dam_astar.png"},
     "compare_models": {"predictions.png", "rmse.png", "summary.csv", "summary.md", "per_channel.csv"},
     "neural_predictors": {"loss_curves.png", "predictions.png"},
-    "crossmap_pipeline": {"1_captured_outlines.png", "2_key_shapes.png", "3_blend_weights.png",
-                          "4_target_key_shapes.png", "5_controls.png", "6_synthesis.png", "6_character.png",
-                          "7_retarget.png", "7_retarget_poses.png", "metrics.json"},
+    "crossmap_pipeline": {
+        "1_captured_outlines.png",
+        "2_key_shapes.png",
+        "3_blend_weights.png",
+        "4_target_key_shapes.png",
+        "5_controls.png",
+        "6_synthesis.png",
+        "6_character.png",
+        "7_retarget.png",
+        "7_retarget_poses.png",
+        "metrics.json",
+    },
 }
 
 
@@ -73,7 +83,9 @@ def test_the_default_output_directory_is_ignored_by_git(tmp_path, monkeypatch):
     # the same path inside the checkout is ignored, so running the examples there leaves git status clean
     done = subprocess.run(["git", "check-ignore", "-q", str(made[0])], cwd=ROOT)
     assert done.returncode == 0, f"{made[0]} is not ignored by git"
-    tracked = subprocess.run(["git", "ls-files", "examples/out", "dam-examples"], cwd=ROOT, capture_output=True,
-                             text=True).stdout.split()
-    assert tracked == [] or not all((ROOT / t).exists() for t in tracked), \
+    tracked = subprocess.run(
+        ["git", "ls-files", "examples/out", "dam-examples"], cwd=ROOT, capture_output=True, text=True
+    ).stdout.split()
+    assert tracked == [] or not all((ROOT / t).exists() for t in tracked), (
         f"generated files tracked by git: {tracked[:5]}"
+    )

@@ -4,6 +4,7 @@ Each notebook is executed once per test session in a temporary directory; any ce
 fails the run. The key outputs are read back from the executed cells (by their tags) and checked
 against what the lesson claims.
 """
+
 import ast
 import json
 import re
@@ -54,7 +55,7 @@ def _stdout(cell) -> str:
 def _printed(cell, prefix):
     """The Python literal printed after ``prefix`` on a line of the cell's output."""
     line = next(ln for ln in _stdout(cell).splitlines() if ln.startswith(prefix))
-    return ast.literal_eval(line[len(prefix):].strip())
+    return ast.literal_eval(line[len(prefix) :].strip())
 
 
 def test_tutorial_runs_and_draws_every_figure(tutorial):
@@ -81,16 +82,21 @@ def test_tutorial_comparison_dam_beats_the_baselines(tutorial):
 def test_tutorial_sigma_and_degree_show_what_the_text_says(tutorial):
     nb, _ = tutorial
     out = _stdout(_cell(nb, "sigma"))
-    curves = {ln.split(" ", 1)[0]: ast.literal_eval(ln.split(" ", 1)[1]) for ln in out.splitlines()
-              if ln.startswith(("polynomial ", "hold "))}
+    curves = {
+        ln.split(" ", 1)[0]: ast.literal_eval(ln.split(" ", 1)[1])
+        for ln in out.splitlines()
+        if ln.startswith(("polynomial ", "hold "))
+    }
     poly, hold = curves["polynomial"], curves["hold"]
     # the fitted sigma sits near the bottom: shrinking or widening it tenfold-ish is worse
     assert poly[1.0] < poly[0.1] and poly[1.0] < poly[4.0]
     assert hold[1.0] < hold[0.1]
     # wide dominance: the polynomial tails blow up, holding the boundary value does not
     assert poly[4.0] > 5 * hold[4.0]
-    degrees = {int(m.group(1)): float(m.group(2))
-               for m in re.finditer(r"M = (\d+): held-out RMSE ([0-9.]+)", _stdout(_cell(nb, "degree")))}
+    degrees = {
+        int(m.group(1)): float(m.group(2))
+        for m in re.finditer(r"M = (\d+): held-out RMSE ([0-9.]+)", _stdout(_cell(nb, "degree")))
+    }
     assert sorted(degrees) == [0, 1, 2, 4]
     assert degrees[4] < degrees[0]  # movements beat constant targets
 
@@ -118,8 +124,9 @@ def test_solutions_run_and_answer(solutions):
 
 
 def test_docs_page_is_current():
-    out = subprocess.run([sys.executable, str(ROOT / "docs" / "notebook_page.py"), "--check"],
-                         capture_output=True, text=True)
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "docs" / "notebook_page.py"), "--check"], capture_output=True, text=True
+    )
     assert out.returncode == 0, out.stderr
 
 

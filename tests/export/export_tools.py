@@ -10,6 +10,7 @@ Both live in a cache folder (``$DAM_TOOL_CACHE``, default ``~/.cache/dam-tools``
 ``python tests/export/export_tools.py`` installs both (CI can run it before the
 tests). The tests call :func:`gltf_validator` and :func:`blender_python`.
 """
+
 from __future__ import annotations
 
 import json
@@ -83,8 +84,20 @@ def install_validator() -> Path:
     mod = _validator_module()
     if not (mod / "index.js").exists():
         mod.parent.parent.mkdir(parents=True, exist_ok=True)
-        proc = subprocess.run(["npm", "install", "--no-audit", "--no-fund", "--prefix", str(mod.parent.parent),
-                               f"gltf-validator@{VALIDATOR_VERSION}"], capture_output=True, text=True, timeout=600)
+        proc = subprocess.run(
+            [
+                "npm",
+                "install",
+                "--no-audit",
+                "--no-fund",
+                "--prefix",
+                str(mod.parent.parent),
+                f"gltf-validator@{VALIDATOR_VERSION}",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
         if proc.returncode or not (mod / "index.js").exists():
             raise ToolMissing(f"npm install gltf-validator failed: {proc.stderr[-2000:]}")
     return mod
@@ -140,8 +153,7 @@ def blender_import(glb, python: str, workdir) -> dict:
     script = Path(workdir) / "blender_dump.py"
     script.write_text(_BLENDER_DUMP)
     out = Path(workdir) / "blender_dump.json"
-    proc = subprocess.run([python, str(script), os.fspath(glb), str(out)], capture_output=True, text=True,
-                          timeout=600)
+    proc = subprocess.run([python, str(script), os.fspath(glb), str(out)], capture_output=True, text=True, timeout=600)
     if proc.returncode:
         raise RuntimeError(f"Blender import failed: {proc.stderr[-3000:]}")
     return json.loads(out.read_text())

@@ -4,6 +4,7 @@ The truth here is VocalTractLab itself (the outline of a tract state, computed i
 dam.crossmap.outlines.tract_outlines), Pillow and ffmpeg decoding the files, and frame counts
 from the duration.
 """
+
 import json
 import re
 
@@ -46,8 +47,7 @@ def _gif_frames(path):
 def test_gif_has_duration_times_fps_frames_and_moves(tmp_path, ramp):
     _, _, X = ramp
     out = tmp_path / "ramp.gif"
-    rep = export(X, out, channels=VTL_CHANNELS, frame_rate=FR, alignment=_alignment(2.0), fps=10,
-                 size=(320, 240))
+    rep = export(X, out, channels=VTL_CHANNELS, frame_rate=FR, alignment=_alignment(2.0), fps=10, size=(320, 240))
     frames = _gif_frames(out)
     assert len(frames) == rep.n_frames == 20  # 2.0 s x 10 frames/s
     assert frames[0].shape == (240, 320, 3)
@@ -64,12 +64,14 @@ def test_html_page_is_self_contained_with_every_frame(tmp_path, ramp):
     assert "http://" not in page and "https://" not in page and "<script src" not in page
     import base64
     import io
+
     first = Image.open(io.BytesIO(base64.b64decode(frames[0])))
     assert first.size == (256, 192)
 
 
 def test_mp4_through_ffmpeg_has_the_frames(tmp_path, ramp):
     import imageio_ffmpeg
+
     _, _, X = ramp
     out = tmp_path / "ramp.mp4"
     export(X[:100], out, channels=VTL_CHANNELS, frame_rate=FR, fps=12, size=(320, 240))
@@ -119,8 +121,16 @@ def test_outline_panels_change_only_when_the_controls_do(ramp):
 def test_views_side_by_side_and_bad_input(tmp_path, ramp):
     a, i, X = ramp
     out = tmp_path / "two.gif"
-    rep = export(X[:50], out, channels=VTL_CHANNELS, frame_rate=FR, fps=10, size=(480, 240),
-                 compare=[("reversed", X[:50][::-1])], metadata={"model": "dam"})
+    rep = export(
+        X[:50],
+        out,
+        channels=VTL_CHANNELS,
+        frame_rate=FR,
+        fps=10,
+        size=(480, 240),
+        compare=[("reversed", X[:50][::-1])],
+        metadata={"model": "dam"},
+    )
     assert rep.n_frames == 5 and "2 views" in rep.notes[0]
     with pytest.raises(DataError, match="19 tract parameters"):
         export(np.zeros((10, 2)), tmp_path / "x.gif", channels=["JA", "LP"], frame_rate=FR)
@@ -137,8 +147,21 @@ def test_cli_animate_prediction_beside_the_recording(tmp_path, capsys):
     src = dam.datasets.path("vtl") / "test"
     tg = str(src / f"{u.name}.TextGrid")
     out = tmp_path / "cmp.html"
-    code = main(["animate", "--alignment", tg, "--truth", str(src / f"{u.name}.npy"), "-o", str(out),
-                 "--fps", "5", "--size", "320x200"])
+    code = main(
+        [
+            "animate",
+            "--alignment",
+            tg,
+            "--truth",
+            str(src / f"{u.name}.npy"),
+            "-o",
+            str(out),
+            "--fps",
+            "5",
+            "--size",
+            "320x200",
+        ]
+    )
     assert code == 0
     page = out.read_text()
     frames = json.loads(re.search(r"const FRAMES = (\[.*?\]);", page, re.S).group(1))

@@ -1,4 +1,5 @@
 """`dam predict` and `dam animate` write animation files by extension; `--stream`; `dam export-runtime`."""
+
 from __future__ import annotations
 
 import io
@@ -35,8 +36,9 @@ def test_predict_writes_every_format_by_extension(fitted, validate, capsys):
     doc = json.load(open(d / "p.json"))
     assert doc["model"] == "dam"
     glob = model.select_modes(u.alignment)[0]
-    assert [p["mode"] for p in doc["phones"]] == [int(g - model.phone_modes_[lab][0])
-                                                  for g, lab in zip(glob, u.alignment.labels)]
+    assert [p["mode"] for p in doc["phones"]] == [
+        int(g - model.phone_modes_[lab][0]) for g, lab in zip(glob, u.alignment.labels)
+    ]
     reports = validate([d / "p.glb", d / "p.gltf"])
     assert all(r["issues"]["numErrors"] == 0 for r in reports.values())
     err = capsys.readouterr().err
@@ -56,28 +58,63 @@ def test_predict_usage_and_data_errors(fitted, capsys):
     assert main(["predict", str(d / "m.npz"), str(d / "u.TextGrid"), "-o", str(d / "x.fbx")]) == 1
     err = capsys.readouterr().err
     assert err.strip().splitlines()[-1].startswith("dam: error:") and "x.fbx" in err
-    assert main(["predict", str(d / "m.npz"), str(d / "u.TextGrid"), "-o", str(d / "x.glb"), "--rig",
-                 str(d / "missing.glb")]) == 1
+    assert (
+        main(
+            [
+                "predict",
+                str(d / "m.npz"),
+                str(d / "u.TextGrid"),
+                "-o",
+                str(d / "x.glb"),
+                "--rig",
+                str(d / "missing.glb"),
+            ]
+        )
+        == 1
+    )
     assert "missing.glb" in capsys.readouterr().err
 
 
 def test_predict_through_a_linear_map_onto_an_arkit_rig(fitted, tmp_path, validate, hand_rig):
     d, model, u = fitted
     rig = hand_rig(tmp_path)
-    (tmp_path / "map.json").write_text(json.dumps({
-        "preset": "arkit", "targets": ["jawOpen", "mouthPucker"],
-        "matrix": {"jaw_open": {"jawOpen": 2.0}, "lip_protrusion": {"mouthPucker": 1.0}}}))
+    (tmp_path / "map.json").write_text(
+        json.dumps(
+            {
+                "preset": "arkit",
+                "targets": ["jawOpen", "mouthPucker"],
+                "matrix": {"jaw_open": {"jawOpen": 2.0}, "lip_protrusion": {"mouthPucker": 1.0}},
+            }
+        )
+    )
     out = tmp_path / "face.glb"
-    assert main(["predict", str(d / "m.npz"), str(d / "u.TextGrid"), "-o", str(out), "--map",
-                 str(tmp_path / "map.json"), "--rig", str(rig), "--weights", "scale"]) == 0
+    assert (
+        main(
+            [
+                "predict",
+                str(d / "m.npz"),
+                str(d / "u.TextGrid"),
+                "-o",
+                str(out),
+                "--map",
+                str(tmp_path / "map.json"),
+                "--rig",
+                str(rig),
+                "--weights",
+                "scale",
+            ]
+        )
+        == 0
+    )
     reports = validate([out])
     assert reports[str(out)]["issues"]["numErrors"] == 0
     y = model.predict(u.alignment)
     jaw = 2.0 * y[:, model.channels_.index("jaw_open")]
     raw = open(out, "rb").read()
     import struct
+
     jlen = struct.unpack_from("<I", raw, 12)[0]
-    doc = json.loads(raw[20:20 + jlen])
+    doc = json.loads(raw[20 : 20 + jlen])
     anim = doc["animations"][-1]
     assert anim["name"] == "dam" and anim["extras"]["channels"] == ["jawOpen", "mouthPucker"]
     face = next(ch for ch in anim["channels"] if doc["nodes"][ch["target"]["node"]]["name"] == "face")
@@ -106,6 +143,7 @@ def test_export_runtime_command(fitted, tmp_path, capsys):
     assert main(["export-runtime", str(d / "m.npz"), "-o", str(tmp_path / "face.json")]) == 0
     assert (tmp_path / "dam_runtime.py").exists()
     import importlib.util
+
     spec = importlib.util.spec_from_file_location("dam_runtime_cli", tmp_path / "dam_runtime.py")
     rt_mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(rt_mod)
@@ -120,6 +158,7 @@ def test_export_runtime_command(fitted, tmp_path, capsys):
 def test_animate_text_onto_an_arkit_rig_through_the_fitted_vtl_map(tmp_path, validate, hand_rig):
     """dam animate (default VTL model) -> vtl:arkit map -> a rig carrying all 52 ARKit names."""
     from dam.export.presets import ARKIT_52, LinearMap
+
     rig = hand_rig(tmp_path, ARKIT_52)
     out = tmp_path / "face.glb"
     assert main(["animate", "--text", "Hello world.", "-o", str(tmp_path / "ref.csv")]) == 0
@@ -130,8 +169,9 @@ def test_animate_text_onto_an_arkit_rig_through_the_fitted_vtl_map(tmp_path, val
     expect = np.clip(m.apply(ref.values, ref.channels), 0, 1)
     raw = open(out, "rb").read()
     import struct
+
     jlen = struct.unpack_from("<I", raw, 12)[0]
-    doc = json.loads(raw[20:20 + jlen])
+    doc = json.loads(raw[20 : 20 + jlen])
     anim = doc["animations"][-1]
     face = next(ch for ch in anim["channels"] if doc["nodes"][ch["target"]["node"]]["name"] == "face")
     names = doc["meshes"][0]["extras"]["targetNames"]
@@ -140,5 +180,5 @@ def test_animate_text_onto_an_arkit_rig_through_the_fitted_vtl_map(tmp_path, val
     W = np.frombuffer(raw, "<f4", acc["count"], 28 + jlen + view["byteOffset"]).reshape(len(ref.values), len(names))
     for t in ("jawOpen", "mouthPucker", "mouthFunnel", "mouthClose"):
         np.testing.assert_allclose(W[:, names.index(t)], expect[:, ARKIT_52.index(t)], atol=1e-6)
-    assert np.all(W[:, names.index("eyeBlinkLeft")] == 0)   # never moved by the map: rest weight
-    assert W[:, names.index("jawOpen")].max() > 0.2          # the mouth opens
+    assert np.all(W[:, names.index("eyeBlinkLeft")] == 0)  # never moved by the map: rest weight
+    assert W[:, names.index("jawOpen")].max() > 0.2  # the mouth opens

@@ -5,6 +5,7 @@ present; without node the tests skip locally and FAIL on CI (CI=true).
 The Blender tests run when a Python with ``bpy`` is found (see
 ``tests/export/export_tools.py``; ``python tests/export/export_tools.py`` installs it).
 """
+
 from __future__ import annotations
 
 import base64
@@ -19,8 +20,27 @@ from dam.corpus import DataError
 from dam.export import export
 from dam.export.gltf import fit_weights
 
-VTL = ("HX", "HY", "JX", "JA", "LP", "LD", "VS", "VO", "TCX", "TCY", "TTX", "TTY", "TBX", "TBY",
-       "TRX", "TRY", "TS1", "TS2", "TS3")
+VTL = (
+    "HX",
+    "HY",
+    "JX",
+    "JA",
+    "LP",
+    "LD",
+    "VS",
+    "VO",
+    "TCX",
+    "TCY",
+    "TTX",
+    "TTY",
+    "TBX",
+    "TBY",
+    "TRX",
+    "TRY",
+    "TS1",
+    "TS2",
+    "TS3",
+)
 
 
 def assert_valid(validate, paths):
@@ -41,15 +61,18 @@ def load_gltf(path):
         assert version == 2 and length == len(raw) and length % 4 == 0
         jlen, jtype = struct.unpack_from("<II", raw, 12)
         assert jtype == 0x4E4F534A and jlen % 4 == 0
-        doc = json.loads(raw[20:20 + jlen])
+        doc = json.loads(raw[20 : 20 + jlen])
         blen, btype = struct.unpack_from("<II", raw, 20 + jlen)
         assert btype == 0x004E4942 and blen % 4 == 0
-        buf = raw[28 + jlen:28 + jlen + blen]
+        buf = raw[28 + jlen : 28 + jlen + blen]
     else:
         doc = json.loads(raw)
         uri = doc["buffers"][0]["uri"]
-        buf = base64.b64decode(uri.split(",", 1)[1]) if uri.startswith("data:") else \
-            open(os.path.join(os.path.dirname(path), uri), "rb").read()
+        buf = (
+            base64.b64decode(uri.split(",", 1)[1])
+            if uri.startswith("data:")
+            else open(os.path.join(os.path.dirname(path), uri), "rb").read()
+        )
 
     def accessor(i):
         a = doc["accessors"][i]
@@ -81,6 +104,7 @@ def animated_weights(path, node_name=None):
 @pytest.fixture(scope="module")
 def vtl_utterance():
     import dam.datasets
+
     corpus = dam.datasets.load("vtl")
     return corpus[0], corpus.channels, corpus.frame_rate
 
@@ -89,6 +113,7 @@ def vtl_utterance():
 def test_vtl_ribbon_glb_and_gltf_pass_the_validator_and_round_trip(tmp_path, validate, vtl_utterance):
     u, channels, fr = vtl_utterance
     from dam.datasets.vtl import import_vtl
+
     info = {p["name"]: p for p in import_vtl().get_param_info("tract")}
     lo = np.array([info[c]["min"] for c in channels])
     hi = np.array([info[c]["max"] for c in channels])
@@ -110,6 +135,7 @@ def test_ribbon_morph_follows_vocaltractlab(tmp_path, validate):
     import dam.datasets
     from dam.crossmap.outlines import tract_outlines
     from dam.export.meshes import RIBBON_POINTS
+
     held_out = dam.datasets.load("vtl")[150]  # the fit used utterances 0-39
     X = held_out.trajectory[::4]
     path = tmp_path / "m.glb"
@@ -128,25 +154,27 @@ def test_ribbon_morph_follows_vocaltractlab(tmp_path, validate):
     truth = tract_outlines(X, n_points=n)
     res = centre - truth
     dev = truth - truth.mean(axis=0)
-    r2 = 1 - (res ** 2).sum() / (dev ** 2).sum()
+    r2 = 1 - (res**2).sum() / (dev**2).sum()
     assert r2 > 0.9, r2
-    assert np.sqrt((res ** 2).mean()) < 0.12  # cm
+    assert np.sqrt((res**2).mean()) < 0.12  # cm
 
 
 def test_toy_ribbon_targets_are_vocaltractlab_shape_differences():
     from dam.crossmap.outlines import TOY_CONTROLS, tract_outlines, vtl_shape
     from dam.export.meshes import RIBBON_POINTS, toy_ribbon
+
     m = toy_ribbon(["jaw_open", "lip_round"])
     for k, name in enumerate(["jaw_open", "lip_round"]):
         a, b = TOY_CONTROLS[name]
-        delta = (tract_outlines(vtl_shape(a), n_points=RIBBON_POINTS)[0]
-                 - tract_outlines(vtl_shape(b), n_points=RIBBON_POINTS)[0]).reshape(4, RIBBON_POINTS, 2)
+        delta = (
+            tract_outlines(vtl_shape(a), n_points=RIBBON_POINTS)[0]
+            - tract_outlines(vtl_shape(b), n_points=RIBBON_POINTS)[0]
+        ).reshape(4, RIBBON_POINTS, 2)
         got = m.targets[k][:, :2].reshape(4, 2, RIBBON_POINTS, 2) / 0.01
         np.testing.assert_allclose(got[:, 0], delta, atol=1e-6)
         np.testing.assert_allclose(got[:, 1], delta, atol=1e-6)
     schwa = tract_outlines(vtl_shape("@"), n_points=RIBBON_POINTS)[0].reshape(4, RIBBON_POINTS, 2)
-    np.testing.assert_allclose(m.positions[:, :2].reshape(4, 2, RIBBON_POINTS, 2).mean(1) / 0.01, schwa,
-                               atol=1e-6)
+    np.testing.assert_allclose(m.positions[:, :2].reshape(4, 2, RIBBON_POINTS, 2).mean(1) / 0.01, schwa, atol=1e-6)
 
 
 @pytest.mark.parametrize("n_controls, n_frames", [(1, 1), (1, 2), (50, 3), (50, 400)])
@@ -171,6 +199,7 @@ def test_one_minute_toy_ribbon_passes(tmp_path, validate):
     n = 60 * 100
     values = np.clip(np.cumsum(rng.normal(0, 0.02, size=(n, 7)), axis=0) % 1.0, 0, 1)
     from dam.crossmap.outlines import TOY_CONTROLS
+
     path = tmp_path / "long.gltf"
     rep = export(values, path, channels=list(TOY_CONTROLS), frame_rate=100)
     assert rep.clipped == {}
@@ -211,16 +240,18 @@ def test_hand_rig_gets_the_animation_matched_by_name_and_mapping(tmp_path, valid
     for p in out:
         anim = animated_weights(p)
         t, W, names = anim["face"]
-        np.testing.assert_allclose(W[:, 0], values[:, 0], atol=1e-6)   # JA -> jawOpen
-        np.testing.assert_allclose(W[:, 1], values[:, 1], atol=1e-6)   # same name
-        np.testing.assert_allclose(W[:, 2], 0.25)                       # undriven: rest weight
+        np.testing.assert_allclose(W[:, 0], values[:, 0], atol=1e-6)  # JA -> jawOpen
+        np.testing.assert_allclose(W[:, 1], values[:, 1], atol=1e-6)  # same name
+        np.testing.assert_allclose(W[:, 2], 0.25)  # undriven: rest weight
         t2, W2, names2 = anim["teeth"]
         np.testing.assert_allclose(W2[:, 0], values[:, 0], atol=1e-6)
         # the rig's geometry is carried over unchanged, its image file moved into the buffer
         doc, acc = load_gltf(p)
         assert "uri" not in doc["images"][0] and doc["images"][0]["mimeType"] == "image/png"
-        np.testing.assert_array_equal(acc(doc["meshes"][0]["primitives"][0]["targets"][1]["POSITION"]),
-                                      np.array([[0.2, 0, 0], [-0.2, 0, 0], [0, 0, 0]], dtype="<f4"))
+        np.testing.assert_array_equal(
+            acc(doc["meshes"][0]["primitives"][0]["targets"][1]["POSITION"]),
+            np.array([[0.2, 0, 0], [-0.2, 0, 0], [0, 0, 0]], dtype="<f4"),
+        )
 
 
 def test_rig_errors_name_both_sides(tmp_path, hand_rig):
@@ -230,15 +261,28 @@ def test_rig_errors_name_both_sides(tmp_path, hand_rig):
     msg = str(exc.value)
     assert "JA" in msg and "lips" in msg and "jawOpen" in msg and "mouthPucker" in msg and "rig.gltf" in msg
     with pytest.raises(DataError, match="nope"):
-        export(np.zeros((3, 1)), tmp_path / "x.glb", channels=["JA"], frame_rate=50, rig=rig,
-               mapping={"JA": "jawOpen", "nope": "mouthClose"})
+        export(
+            np.zeros((3, 1)),
+            tmp_path / "x.glb",
+            channels=["JA"],
+            frame_rate=50,
+            rig=rig,
+            mapping={"JA": "jawOpen", "nope": "mouthClose"},
+        )
     with pytest.raises(DataError, match="same morph target"):
-        export(np.zeros((3, 2)), tmp_path / "x.glb", channels=["JA", "jawOpen"], frame_rate=50, rig=rig,
-               mapping={"JA": "jawOpen"})
+        export(
+            np.zeros((3, 2)),
+            tmp_path / "x.glb",
+            channels=["JA", "jawOpen"],
+            frame_rate=50,
+            rig=rig,
+            mapping={"JA": "jawOpen"},
+        )
     (tmp_path / "bad.json").write_text("[1, 2]")
     with pytest.raises(DataError, match="bad.json"):
-        export(np.zeros((3, 1)), tmp_path / "x.glb", channels=["JA"], frame_rate=50, rig=rig,
-               mapping=tmp_path / "bad.json")
+        export(
+            np.zeros((3, 1)), tmp_path / "x.glb", channels=["JA"], frame_rate=50, rig=rig, mapping=tmp_path / "bad.json"
+        )
     (tmp_path / "junk.glb").write_bytes(b"not a gltf")
     with pytest.raises(DataError, match="junk.glb"):
         export(np.zeros((3, 1)), tmp_path / "x.glb", channels=["JA"], frame_rate=50, rig=tmp_path / "junk.glb")
@@ -257,8 +301,7 @@ def test_bad_input_is_refused_before_writing(tmp_path):
 
 
 # -- Blender -------------------------------------------------------------------------------------
-def test_blender_imports_shape_keys_with_their_keyframes(tmp_path, blender, validate, vtl_utterance,
-                                                         export_tools):
+def test_blender_imports_shape_keys_with_their_keyframes(tmp_path, blender, validate, vtl_utterance, export_tools):
     u, channels, fr = vtl_utterance
     path = tmp_path / "face.glb"
     export(u.trajectory[:60], path, channels=channels, frame_rate=fr, alignment=None)
@@ -277,6 +320,7 @@ def test_blender_imports_shape_keys_with_their_keyframes(tmp_path, blender, vali
 def test_blender_made_rig_round_trip(tmp_path, blender, validate, export_tools):
     """A rig authored in Blender, animated by dam, imported back into Blender."""
     import subprocess
+
     make = tmp_path / "make_rig.py"
     make.write_text(
         "import bpy, sys\n"
@@ -287,14 +331,14 @@ def test_blender_made_rig_round_trip(tmp_path, blender, validate, export_tools):
         "for i, n in enumerate(['jawOpen', 'mouthFunnel', 'viseme_aa']):\n"
         "    k = ob.shape_key_add(name=n)\n"
         "    for v in k.data: v.co.z += 0.1 * (i + 1)\n"
-        "bpy.ops.export_scene.gltf(filepath=sys.argv[-1], export_format='GLB')\n")
+        "bpy.ops.export_scene.gltf(filepath=sys.argv[-1], export_format='GLB')\n"
+    )
     rig = tmp_path / "rig.glb"
     proc = subprocess.run([blender, str(make), str(rig)], capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-2000:]
     values = np.linspace(0, 1, 30)[:, None] * np.array([[1.0, 0.5]])
     out = tmp_path / "anim.glb"
-    export(values, out, channels=["JA", "aa"], frame_rate=24, rig=rig,
-           mapping={"JA": "jawOpen", "aa": "viseme_aa"})
+    export(values, out, channels=["JA", "aa"], frame_rate=24, rig=rig, mapping={"JA": "jawOpen", "aa": "viseme_aa"})
     assert_valid(validate, [rig, out])
     res = export_tools.blender_import(out, blender, tmp_path)
     obj = next(iter(res["objects"].values()))

@@ -1,4 +1,5 @@
 """The tiny runtime: run in a subprocess where dam cannot be imported; output equals the toolkit's."""
+
 from __future__ import annotations
 
 import ast
@@ -63,13 +64,22 @@ def play(tmp_path, models: dict, alignments):
         for ext in (".json", ".npz"):
             paths[name + ext] = str(work / f"{name}{ext}")
             export_runtime(m, paths[name + ext])
-    jobs = {"models": paths, "alignments": [{"labels": list(a.labels), "starts": a.starts.tolist(),
-                                              "ends": a.ends.tolist()} for a in alignments]}
+    jobs = {
+        "models": paths,
+        "alignments": [
+            {"labels": list(a.labels), "starts": a.starts.tolist(), "ends": a.ends.tolist()} for a in alignments
+        ],
+    }
     (work / "jobs.json").write_text(json.dumps(jobs))
     (work / "player.py").write_text(PLAYER)
-    proc = subprocess.run([sys.executable, "-S", str(work / "player.py"), NUMPY_HOME, str(work / "jobs.json"),
-                           str(work / "out.npz")], cwd=work, capture_output=True, text=True, timeout=600,
-                          env={k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")})
+    proc = subprocess.run(
+        [sys.executable, "-S", str(work / "player.py"), NUMPY_HOME, str(work / "jobs.json"), str(work / "out.npz")],
+        cwd=work,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env={k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")},
+    )
     assert proc.returncode == 0, proc.stderr[-3000:] + proc.stdout[-1000:]
     with np.load(work / "out.npz") as z:
         return {k: z[k] for k in z.files}
@@ -78,10 +88,14 @@ def play(tmp_path, models: dict, alignments):
 @pytest.fixture(scope="module")
 def tiny_models():
     tiny = dam.datasets.load("tiny")
-    return tiny, {"dam": dam.make("dam").fit(tiny), "dam-m0": dam.make("dam-m0").fit(tiny),
-                  "dam-plain-hold": dam.make("dam", normalize=False, extrapolate="hold", degree=2).fit(tiny),
-                  "cohen-massaro": dam.make("cohen-massaro").fit(tiny),
-                  "phone-mean": dam.make("phone-mean").fit(tiny)}
+    return tiny, {
+        "dam": dam.make("dam").fit(tiny),
+        "dam-m0": dam.make("dam-m0").fit(tiny),
+        "dam-plain-hold": dam.make("dam", normalize=False, extrapolate="hold", degree=2).fit(tiny),
+        "cohen-massaro": dam.make("cohen-massaro").fit(tiny),
+        "phone-mean": dam.make("phone-mean").fit(tiny),
+    }
+
 
 DAMS = ("dam", "dam-m0", "dam-plain-hold")
 
@@ -94,8 +108,9 @@ def test_runtime_equals_toolkit_on_tiny_without_dam(tmp_path, tiny_models):
     for name, m in models.items():
         for ext in (".json", ".npz"):
             for k, a in enumerate(aligns):
-                np.testing.assert_allclose(out[f"{name}{ext}/{k}"], m.predict(a), atol=1e-9, rtol=0,
-                                           err_msg=f"{name}{ext} alignment {k}")
+                np.testing.assert_allclose(
+                    out[f"{name}{ext}/{k}"], m.predict(a), atol=1e-9, rtol=0, err_msg=f"{name}{ext} alignment {k}"
+                )
                 if name in DAMS:
                     np.testing.assert_array_equal(out[f"{name}{ext}/{k}/modes"], m.select_modes(a)[0])
 
@@ -138,13 +153,17 @@ def test_runtime_gaps_silence_and_unknown_phones(tmp_path, tiny_models):
     rt = dam_runtime.load(tmp_path / "m.json")
     # a gap becomes silence and "sp" is silence, as in the toolkit's Alignment
     a = Alignment(["aa", "sp", "m"], [0.05, 0.2, 0.3], [0.2, 0.3, 0.42])
-    np.testing.assert_allclose(rt.synthesize(["aa", "sp", "m"], [0.2, 0.3, 0.42], [0.05, 0.2, 0.3]),
-                               m.predict(a), atol=1e-9)
+    np.testing.assert_allclose(
+        rt.synthesize(["aa", "sp", "m"], [0.2, 0.3, 0.42], [0.05, 0.2, 0.3]), m.predict(a), atol=1e-9
+    )
     # adjacent silences (and a gap next to one) are one pause
     a = Alignment(["sil", "pau", "aa", "sil", "m"], [0, 0.1, 0.2, 0.3, 0.45], [0.1, 0.2, 0.3, 0.4, 0.6])
     assert len(a) == 4
-    np.testing.assert_allclose(rt.synthesize(["sil", "pau", "aa", "sil", "m"], [0.1, 0.2, 0.3, 0.4, 0.6],
-                                             [0, 0.1, 0.2, 0.3, 0.45]), m.predict(a), atol=1e-9)
+    np.testing.assert_allclose(
+        rt.synthesize(["sil", "pau", "aa", "sil", "m"], [0.1, 0.2, 0.3, 0.4, 0.6], [0, 0.1, 0.2, 0.3, 0.45]),
+        m.predict(a),
+        atol=1e-9,
+    )
     with pytest.raises(KeyError, match="zz"):
         rt.synthesize(["aa", "zz"], [0.1, 0.2])
     with pytest.raises(ValueError, match="dam-runtime"):

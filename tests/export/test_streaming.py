@@ -1,4 +1,5 @@
 """Streaming synthesis equals batch, and a frame once returned never changes."""
+
 from __future__ import annotations
 
 import math
@@ -25,8 +26,11 @@ def model(tiny):
 
 
 def phones_strategy(phones, max_duration):
-    return st.lists(st.tuples(st.sampled_from(sorted(phones)),
-                              st.floats(0.015, max_duration, allow_nan=False)), min_size=1, max_size=25)
+    return st.lists(
+        st.tuples(st.sampled_from(sorted(phones)), st.floats(0.015, max_duration, allow_nan=False)),
+        min_size=1,
+        max_size=25,
+    )
 
 
 def run_stream(s, seq):
@@ -78,7 +82,7 @@ def test_emitted_frames_never_change_whatever_comes_next(model, data):
     assert len(got) == s.n_emitted
     for fut in futures:
         ref = model.predict(alignment_of(prefix + fut))
-        np.testing.assert_allclose(got, ref[:len(got)], atol=1e-9, rtol=0)
+        np.testing.assert_allclose(got, ref[: len(got)], atol=1e-9, rtol=0)
 
 
 def test_adjacent_silences_merge_as_in_the_alignment(model):
@@ -96,10 +100,12 @@ def test_adjacent_silences_merge_as_in_the_alignment(model):
 
 def test_lookahead_is_reach_times_longest_phone(model):
     from dam.model.dominance import reach
+
     s = StreamingSynthesizer(model, max_duration=0.2)
     r = float(np.sqrt(-(model.sigma_.max() ** 2 + model.eps) * np.log(model.dominance_tol)))
-    assert s.reach == pytest.approx(r) == pytest.approx(float(reach(model.sigma_.max(), model.eps,
-                                                                      model.dominance_tol)))
+    assert (
+        s.reach == pytest.approx(r) == pytest.approx(float(reach(model.sigma_.max(), model.eps, model.dominance_tol)))
+    )
     assert s.lookahead == pytest.approx(0.2 * r)
     assert s.lookahead_frames == math.ceil(0.2 * r * model.frame_rate_)
     # frames do come out before the end of a long utterance

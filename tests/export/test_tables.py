@@ -1,4 +1,5 @@
 """CSV, JSON and TextGrid exports: round trips through independent readers; presets and maps."""
+
 from __future__ import annotations
 
 import csv
@@ -24,8 +25,12 @@ def sample(n_frames=37, n_channels=3, seed=0):
 
 
 @settings(max_examples=30, deadline=None)
-@given(n_frames=st.integers(1, 60), n_channels=st.integers(1, 50), seed=st.integers(0, 10 ** 6),
-       fr=st.sampled_from([24.0, 30.0, 100.0, 400.9]))
+@given(
+    n_frames=st.integers(1, 60),
+    n_channels=st.integers(1, 50),
+    seed=st.integers(0, 10**6),
+    fr=st.sampled_from([24.0, 30.0, 100.0, 400.9]),
+)
 def test_csv_and_json_round_trip_exactly(tmp_path_factory, n_frames, n_channels, seed, fr):
     d = tmp_path_factory.mktemp("rt")
     values, channels = sample(n_frames, n_channels, seed)
@@ -51,8 +56,15 @@ def test_csv_and_json_round_trip_exactly(tmp_path_factory, n_frames, n_channels,
 def test_json_keeps_phones_modes_model_and_version(tmp_path):
     values, channels = sample(31)
     a = Alignment(["sil", "h", "a", "sil"], [0, 0.05, 0.12, 0.25], [0.05, 0.12, 0.25, 0.3])
-    export(values, tmp_path / "a.json", channels=channels, frame_rate=100, alignment=a, modes=[0, 1, 2, 0],
-           metadata={"model": "dam", "speaker": "JD3"})
+    export(
+        values,
+        tmp_path / "a.json",
+        channels=channels,
+        frame_rate=100,
+        alignment=a,
+        modes=[0, 1, 2, 0],
+        metadata={"model": "dam", "speaker": "JD3"},
+    )
     doc = json.load(open(tmp_path / "a.json"))
     assert doc["toolkit"] == {"name": "dam", "version": dam.__version__}
     assert doc["model"] == "dam" and doc["metadata"] == {"speaker": "JD3"}
@@ -64,13 +76,20 @@ def test_json_keeps_phones_modes_model_and_version(tmp_path):
 
 def test_textgrid_of_phones_and_chosen_modes_read_by_praatio(tmp_path):
     from praatio import textgrid as ptg
+
     corpus = dam.datasets.load("tiny")
     model = dam.make("dam").fit(corpus)
     u = corpus[3]
     y = model.predict(u.alignment)
     modes = chosen_modes(model, u.alignment)
-    export(y, tmp_path / "a.TextGrid", channels=corpus.channels, frame_rate=corpus.frame_rate,
-           alignment=u.alignment, modes=modes)
+    export(
+        y,
+        tmp_path / "a.TextGrid",
+        channels=corpus.channels,
+        frame_rate=corpus.frame_rate,
+        alignment=u.alignment,
+        modes=modes,
+    )
     tg = ptg.openTextgrid(str(tmp_path / "a.TextGrid"), includeEmptyIntervals=True)
     assert list(tg.tierNames) == ["phones", "modes"]
     phones = tg.getTier("phones").entries
@@ -100,11 +119,16 @@ def test_bad_input_names_file_field_and_value(tmp_path):
     with pytest.raises(DataError, match=r"trajectories\[4, 'ch1'\].*not finite"):
         export(bad, tmp_path / "a.json", channels=channels, frame_rate=100)
     with pytest.raises(DataError, match="covers"):
-        export(values, tmp_path / "a.json", channels=channels, frame_rate=100,
-               alignment=Alignment(["a"], [0], [1.0]))
+        export(values, tmp_path / "a.json", channels=channels, frame_rate=100, alignment=Alignment(["a"], [0], [1.0]))
     with pytest.raises(DataError, match="one mode per segment"):
-        export(values, tmp_path / "a.json", channels=channels, frame_rate=100,
-               alignment=Alignment(["a"], [0], [0.095]), modes=[0, 1])
+        export(
+            values,
+            tmp_path / "a.json",
+            channels=channels,
+            frame_rate=100,
+            alignment=Alignment(["a"], [0], [0.095]),
+            modes=[0, 1],
+        )
     with pytest.raises(DataError, match="needs the phones"):
         export(values, tmp_path / "a.TextGrid", channels=channels, frame_rate=100)
     with pytest.raises(DataError, match="not an option of the csv"):
@@ -124,8 +148,16 @@ def test_presets_have_the_standard_names():
     # every ARKit location but the four singles comes as a Left/Right pair
     sides = [n for n in ARKIT_52 if n.endswith(("Left", "Right"))]
     assert {n[:-4] for n in sides if n.endswith("Left")} == {n[:-5] for n in sides if n.endswith("Right")}
-    assert set(ARKIT_52) - set(sides) >= {"jawOpen", "jawForward", "mouthClose", "mouthFunnel", "mouthPucker",
-                                          "cheekPuff", "tongueOut", "browInnerUp"}
+    assert set(ARKIT_52) - set(sides) >= {
+        "jawOpen",
+        "jawForward",
+        "mouthClose",
+        "mouthFunnel",
+        "mouthPucker",
+        "cheekPuff",
+        "tongueOut",
+        "browInnerUp",
+    }
     assert preset_names("Oculus")[0] == "viseme_sil" and preset_names("oculus")[10] == "viseme_aa"
     with pytest.raises(DataError, match="unknown preset"):
         preset_names("metahuman")
@@ -146,8 +178,9 @@ def test_linear_map_fit_recovers_a_known_map_and_round_trips(tmp_path):
     (tmp_path / "sparse.json").write_text(json.dumps({"preset": "oculus", "matrix": {"jaw": {"viseme_aa": 2.0}}}))
     sparse = LinearMap.load(tmp_path / "sparse.json")
     assert sparse.targets == OCULUS_15
-    np.testing.assert_array_equal(sparse.apply(np.array([[0.25]]), ["jaw"])[0],
-                                  [0.5 if t == "viseme_aa" else 0 for t in OCULUS_15])
+    np.testing.assert_array_equal(
+        sparse.apply(np.array([[0.25]]), ["jaw"])[0], [0.5 if t == "viseme_aa" else 0 for t in OCULUS_15]
+    )
     with pytest.raises(DataError, match="not names of the arkit preset"):
         LinearMap(["a"], ["jawOpen", "jaw_open"], np.zeros((1, 2)), preset="arkit")
     with pytest.raises(DataError, match="no such channels"):
@@ -157,6 +190,7 @@ def test_linear_map_fit_recovers_a_known_map_and_round_trips(tmp_path):
 def test_hand_made_toy_map_drives_an_arkit_named_rig(tmp_path):
     """The toy gestures, mapped to ARKit names, animate a rig with ARKit-named targets."""
     from dam.crossmap.outlines import TOY_CONTROLS
+
     m = LinearMap.hand_made("toy", "arkit")
     assert m.targets == ARKIT_52
     values = np.zeros((5, len(TOY_CONTROLS)))
@@ -170,6 +204,7 @@ def test_fitted_vtl_viseme_map_finds_the_spoken_viseme_on_held_out_speech():
     """Tract parameters -> Oculus visemes, fitted on one part of vtl, tested on another."""
     from dam.corpus import frame_labels
     from dam.export.presets import OCULUS_TO_ARKIT, SAMPA_TO_OCULUS
+
     vtl = dam.datasets.load("vtl")
     m = LinearMap.from_phones(vtl[:120], SAMPA_TO_OCULUS, "oculus")
     names = [t.removeprefix("viseme_") for t in OCULUS_15]

@@ -1,10 +1,25 @@
 """Mode selection: A* against exhaustive enumeration and dynamic programming; E_c back-off; E_s by hand."""
+
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from dam.model.astar import (BOUNDARY, ModeGraph, astar, astar_blocks, chain_dp, context_counts, exhaustive,
-                             free_path, mode_nll, pad_layers, path_cost, smoothness_costs, viterbi)
+from dam.model.astar import (
+    BOUNDARY,
+    ModeGraph,
+    astar,
+    astar_blocks,
+    chain_dp,
+    context_counts,
+    exhaustive,
+    free_path,
+    mode_nll,
+    pad_layers,
+    path_cost,
+    smoothness_costs,
+    viterbi,
+)
 
 
 def _graph(seed, n_layers, max_modes, scale_edges=1.0):
@@ -22,13 +37,17 @@ def test_astar_equals_exhaustive_on_small_random_graphs(seed, n_layers, max_mode
     p1, c1 = astar(nodes, edges)
     p2, c2 = exhaustive(nodes, edges)
     assert c1 == pytest.approx(c2, rel=1e-12)
-    assert p1 == p2          # continuous random costs: the optimum is unique
+    assert p1 == p2  # continuous random costs: the optimum is unique
     assert path_cost(p1, nodes, edges) == pytest.approx(c1, rel=1e-12)
 
 
 @settings(max_examples=60, deadline=None)
-@given(seed=st.integers(0, 2**31 - 1), n_layers=st.integers(2, 60), max_modes=st.integers(1, 6),
-       scale=st.sampled_from([0.01, 1.0, 100.0]))
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    n_layers=st.integers(2, 60),
+    max_modes=st.integers(1, 6),
+    scale=st.sampled_from([0.01, 1.0, 100.0]),
+)
 def test_astar_equals_dynamic_programming_on_long_random_graphs(seed, n_layers, max_modes, scale):
     nodes, edges = _graph(seed, n_layers, max_modes, scale)
     p1, c1 = astar(nodes, edges)
@@ -77,17 +96,17 @@ def test_context_counts_and_backoff_levels():
     assert stats["x"]["trigram"]["b"]["c"] == [1, 1]
     assert stats["a"]["left"][BOUNDARY] == [2]
     alpha = 0.5
-    nll, level = mode_nll(stats, "x", "a", "b", 2, alpha)     # seen trigram
+    nll, level = mode_nll(stats, "x", "a", "b", 2, alpha)  # seen trigram
     assert level == "trigram"
     np.testing.assert_allclose(nll, -np.log(np.array([1.5, 0.5]) / 2.0))
-    nll, level = mode_nll(stats, "x", "a", "a", 2, alpha)     # unseen trigram: left bigram only
+    nll, level = mode_nll(stats, "x", "a", "a", 2, alpha)  # unseen trigram: left bigram only
     assert level == "bigram"
     np.testing.assert_allclose(nll, -np.log(np.array([1.5, 1.5]) / 3.0))
-    nll, level = mode_nll(stats, "x", "b", "b", 2, alpha)     # left "b" and right "b" both seen
+    nll, level = mode_nll(stats, "x", "b", "b", 2, alpha)  # left "b" and right "b" both seen
     p_left = (np.array([1, 1]) + alpha) / (2 + 2 * alpha)
     p_right = (np.array([1, 0]) + alpha) / (1 + 2 * alpha)
     np.testing.assert_allclose(nll, -np.log((p_left + p_right) / 2))
-    nll, level = mode_nll(stats, "x", "z", "z", 2, alpha)     # nothing: unigram
+    nll, level = mode_nll(stats, "x", "z", "z", 2, alpha)  # nothing: unigram
     assert level == "unigram"
     np.testing.assert_allclose(nll, -np.log((np.array([2, 2]) + alpha) / (4 + 2 * alpha)))
 
@@ -126,6 +145,6 @@ def test_mode_graph_node_costs_equal_mode_nll_in_every_context(alpha):
                 pid, _, count = graph.layers(seq)
                 nll, level = graph.node_costs(pid, count, alpha)
                 want, lev = mode_nll(stats, p, left or BOUNDARY, right or BOUNDARY, n_modes[p], alpha)
-                np.testing.assert_allclose(nll[j, :n_modes[p]], want, rtol=1e-12)
-                assert np.all(np.isinf(nll[j, n_modes[p]:]))
+                np.testing.assert_allclose(nll[j, : n_modes[p]], want, rtol=1e-12)
+                assert np.all(np.isinf(nll[j, n_modes[p] :]))
                 assert level[j] == levels[lev]

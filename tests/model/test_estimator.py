@@ -1,6 +1,7 @@
 """The DAM as a whole: parameter recovery from corpora generated with known
 parameters, modes tied to context found and chosen, inspection, the file
 format and the numpy-only runtime."""
+
 import json
 import subprocess
 import sys
@@ -21,8 +22,9 @@ PHONES = ["a", "b", "c", "d", "e"]
 def _truth(extrapolate="polynomial", seed=0, sigma_range=(0.2, 0.6), degree=4, normalize=False):
     """A known DAM; the plain sum (Eq. 2 as printed) unless ``normalize``."""
     par = dam_parameters(PHONES, 2, degree=degree, random_state=seed, sigma_range=sigma_range)
-    return DAM.from_parameters(par, frame_rate=100.0, channels=["x", "y"], basis="legendre",
-                               extrapolate=extrapolate, normalize=normalize)
+    return DAM.from_parameters(
+        par, frame_rate=100.0, channels=["x", "y"], basis="legendre", extrapolate=extrapolate, normalize=normalize
+    )
 
 
 @pytest.mark.parametrize("extrapolate,seed", [("polynomial", 2), ("polynomial", 4), ("hold", 0)])
@@ -30,8 +32,9 @@ def test_recovers_known_parameters_noise_free(extrapolate, seed):
     # sigma up to 0.6 durations: neighbouring dominances overlap over most of each phone
     true = _truth(extrapolate, seed)
     corpus = make_corpus(true, n_utterances=25, random_state=seed)
-    m = DAM(modes="single", extrapolate=extrapolate, degree=4, tol=1e-10, max_iter=40, ridge=1e-10,
-            normalize=False).fit(corpus)
+    m = DAM(
+        modes="single", extrapolate=extrapolate, degree=4, tol=1e-10, max_iter=40, ridge=1e-10, normalize=False
+    ).fit(corpus)
     np.testing.assert_allclose(m.sigma_, true.sigma_, atol=1e-5)
     np.testing.assert_allclose(m.coef_, true.coef_, atol=1e-4)
     pred = m.predict(corpus.alignments[:3])
@@ -48,7 +51,7 @@ def test_recovers_known_parameters_with_noise():
     np.testing.assert_allclose(m.coef_, true.coef_, atol=0.06)
     # the fit explains everything but the noise
     mse = m.loss_curve_[0][-1]
-    assert noise ** 2 * 0.9 < mse < noise ** 2 * 1.1
+    assert noise**2 * 0.9 < mse < noise**2 * 1.1
 
 
 def test_recovers_weighted_average_model():
@@ -63,14 +66,14 @@ def _two_mode_truth():
     """Phone "a" rises after "b" and falls after "c": two shapes tied to the left context."""
     C = 2
     flat = np.zeros((3, C))
-    phones = {p: (np.array([[[v, 0.0], [0.0, 0.0], [0.0, 0.0]]]), 0.3) for p, v in
-              [("b", 0.5), ("c", -0.5), ("d", 0.0)]}
+    phones = {
+        p: (np.array([[[v, 0.0], [0.0, 0.0], [0.0, 0.0]]]), 0.3) for p, v in [("b", 0.5), ("c", -0.5), ("d", 0.0)]
+    }
     up = np.array([[-1.0, 1.0], [2.0, -2.0], [0.0, 0.0]])
     down = -up
     phones["a"] = (np.stack([up, down]), np.array([[0.3, 0.3], [0.2, 0.2]]))
     del flat
-    return DAM.from_parameters(phones, frame_rate=100.0, channels=["x", "y"], basis="monomial",
-                               extrapolate="hold")
+    return DAM.from_parameters(phones, frame_rate=100.0, channels=["x", "y"], basis="monomial", extrapolate="hold")
 
 
 def _rule(phone, left, right):
@@ -110,8 +113,7 @@ def test_two_shapes_tied_to_context_are_found_as_two_modes_and_chosen():
 
 def test_explain_and_inspection():
     true = _two_mode_truth()
-    corpus = make_corpus(true, n_utterances=30, mode_rule=_rule, random_state=0,
-                         phones=["a", "b", "c", "d"])
+    corpus = make_corpus(true, n_utterances=30, mode_rule=_rule, random_state=0, phones=["a", "b", "c", "d"])
     m = DAM(extrapolate="hold", degree=2, max_iter=5).fit(corpus)
     a = corpus[0].alignment
     rows = m.explain(a)
@@ -152,9 +154,9 @@ def test_select_modes_equals_dynamic_programming_on_the_model_graph():
         G = coef.shape[0]
         tri = {L: {R: rng.integers(0, 5, G).tolist() for R in names} for L in names}
         counts[p] = {"unigram": rng.integers(1, 9, G).tolist(), "left": {}, "right": {}, "trigram": tri}
-    m = DAM.from_parameters(phones, frame_rate=100.0, channels=["x", "y"], context_counts=counts,
-                            w_c=1.0, w_s=0.3)
+    m = DAM.from_parameters(phones, frame_rate=100.0, channels=["x", "y"], context_counts=counts, w_c=1.0, w_s=0.3)
     from dam.model.astar import viterbi
+
     for seed in range(5):
         a = random_alignment(np.random.default_rng(seed), list(phones), n_segments=60)
         glob, cost = m.select_modes(a)
@@ -168,13 +170,18 @@ def test_select_modes_equals_dynamic_programming_on_the_model_graph():
 
 def test_em_that_stops_at_max_iter_warns_naming_the_channels():
     from dam.base import ConvergenceWarning
+
     corpus = make_corpus(_truth("hold", 0, degree=1), n_utterances=6, noise=0.05, random_state=0)
-    with pytest.warns(ConvergenceWarning, match=r"max_iter=1 .*tol=1e-12.*x \(last relative improvement "
-                                                r".*y \(.*Raise max_iter, or raise tol"):
+    with pytest.warns(
+        ConvergenceWarning,
+        match=r"max_iter=1 .*tol=1e-12.*x \(last relative improvement "
+        r".*y \(.*Raise max_iter, or raise tol",
+    ):
         m = DAM(modes="single", degree=1, max_iter=1, tol=1e-12).fit(corpus)
     assert not m.converged_.any() and np.all(m.n_iter_ == 1)
     # converged: no warning
     import warnings
+
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
         m = DAM(modes="single", degree=1, max_iter=30, tol=0.5).fit(corpus)
@@ -188,14 +195,20 @@ def test_unknown_phone_errors_or_falls_back():
     a = Alignment(["a", "p", "c"], [0, 0.1, 0.2], [0.1, 0.2, 0.3])
     with pytest.raises(UnknownPhoneError, match="'p'"):
         m.predict(a)
-    m.set_params(unknown_phone="fallback")      # "p" -> the seen bilabial "b"
+    m.set_params(unknown_phone="fallback")  # "p" -> the seen bilabial "b"
     np.testing.assert_array_equal(m.predict(a), m.predict(a.relabel({"p": "b"})))
 
 
 def test_bad_hyperparameters_are_refused_by_name():
     corpus = make_corpus(_truth("hold", 0, degree=1), n_utterances=3, random_state=0)
-    for kw in ({"degree": -1}, {"extrapolate": "zero"}, {"modes": "kmeans"}, {"sigma_init": -1.0},
-               {"dominance_tol": 1.5}, {"gn_steps": 0}):
+    for kw in (
+        {"degree": -1},
+        {"extrapolate": "zero"},
+        {"modes": "kmeans"},
+        {"sigma_init": -1.0},
+        {"dominance_tol": 1.5},
+        {"gn_steps": 0},
+    ):
         with pytest.raises(ValueError, match=list(kw)[0]):
             DAM(**kw).fit(corpus)
 
@@ -212,8 +225,7 @@ def test_registry_and_m0_variant():
 
 def test_saved_model_loads_and_synthesizes_with_numpy_only(tmp_path):
     true = _two_mode_truth()
-    corpus = make_corpus(true, n_utterances=20, mode_rule=_rule, random_state=0,
-                         phones=["a", "b", "c", "d"])
+    corpus = make_corpus(true, n_utterances=20, mode_rule=_rule, random_state=0, phones=["a", "b", "c", "d"])
     m = DAM(extrapolate="hold", degree=2, max_iter=3).fit(corpus)
     path = tmp_path / "m.dam"
     m.save(path)
@@ -228,13 +240,22 @@ def test_saved_model_loads_and_synthesizes_with_numpy_only(tmp_path):
         a = Alignment({list(a.labels)!r}, {a.starts.tolist()!r}, {a.ends.tolist()!r})
         y = m.predict(a)
         m.explain(a)
-        ok = np.array_equal(y, np.load({str(tmp_path / 'want.npy')!r}))
+        ok = np.array_equal(y, np.load({str(tmp_path / "want.npy")!r}))
         heavy = sorted(k for k in sys.modules if k.split('.')[0] in ('scipy', 'sklearn', 'matplotlib', 'jax'))
         print(json.dumps({{"equal": ok, "heavy": heavy}}))
     """)
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         cwd=str(tmp_path), env={"PYTHONPATH": str(__import__("pathlib").Path(__file__).parents[1]),
-                                                 "OPENBLAS_NUM_THREADS": "1", "PATH": ""})
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=str(tmp_path),
+        env={
+            "PYTHONPATH": str(__import__("pathlib").Path(__file__).parents[1]),
+            "OPENBLAS_NUM_THREADS": "1",
+            "PATH": "",
+        },
+    )
     res = json.loads(out.stdout.strip().splitlines()[-1])
     assert res["heavy"] == []
     assert res["equal"]
@@ -257,7 +278,9 @@ def test_synthetic_generator_is_deterministic_and_renders_the_model():
     clean = make_corpus(true, n_utterances=3, random_state=5)
     for u in clean:
         np.testing.assert_array_equal(u.trajectory, true.predict(u.alignment))
-    a = random_alignment(np.random.default_rng(0), ["a", "b"], n_segments=5, durations={"a": (0.1, 0.1), "b": (0.2, 0.2)})
+    a = random_alignment(
+        np.random.default_rng(0), ["a", "b"], n_segments=5, durations={"a": (0.1, 0.1), "b": (0.2, 0.2)}
+    )
     assert len(a) == 5 and all(abs(d - {"a": 0.1, "b": 0.2}[p]) < 1e-12 for p, d in zip(a.labels, a.durations))
     # a model renders only at its own frame rate: another one would mislabel every frame's time
     with pytest.raises(ValueError, match="frame_rate.*50.*100 Hz"):
@@ -266,6 +289,7 @@ def test_synthetic_generator_is_deterministic_and_renders_the_model():
 
 def test_cli_inspect_prints_the_report(tmp_path, capsys):
     from dam.cli import main
+
     m = _two_mode_truth()
     m.save(tmp_path / "m.dam")
     assert main(["inspect", str(tmp_path / "m.dam"), "--phone", "a"]) == 0
@@ -281,6 +305,7 @@ def test_zero_weights_of_the_search_are_an_ablation_not_a_crash():
     not a cost), every chosen mode belongs to its phone, and the weights act without refitting."""
     import dam
     from dam.model.estimator import DAM
+
     train = dam.datasets.load("tiny")
     model = DAM(max_iter=2, n_resample=8, min_occurrences=4, min_mode_size=2, mode_preference="median").fit(train)
     assert max(g for _, g in model.phone_modes_.values()) > 1
@@ -301,18 +326,19 @@ def test_predict_is_stateless_and_sees_coefficients_changed_in_place(tmp_path):
     """Issue 11: predict kept caches keyed by id(coef_), stale after an in-place change."""
     import dam
     from dam.model.estimator import DAM
+
     train = dam.datasets.load("tiny")
     model = DAM(max_iter=2, n_resample=8, min_occurrences=4, min_mode_size=2, mode_preference="median").fit(train)
     a = train[1].alignment
     names = set(vars(model))
     y0 = model.predict(a)
-    assert set(vars(model)) == names                       # predict adds nothing
-    model.coef_ *= 2.0                                     # in place: same object, same id
+    assert set(vars(model)) == names  # predict adds nothing
+    model.coef_ *= 2.0  # in place: same object, same id
     model.sigma_[:] = model.sigma_ * 0.5
     y1 = model.predict(a)
     assert set(vars(model)) == names
     model.save(tmp_path / "m.dam")
-    fresh = dam.load(tmp_path / "m.dam")                   # the graph rebuilt at load, from the changed state
+    fresh = dam.load(tmp_path / "m.dam")  # the graph rebuilt at load, from the changed state
     np.testing.assert_allclose(y1, fresh.predict(a), rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(model.select_modes(a)[0], fresh.select_modes(a)[0])
     assert not np.allclose(y0, y1)

@@ -10,6 +10,7 @@ Eq. (2) over every phone with no truncation, its own ``eps``, frames at
 must reproduce held-out utterances to under 0.5% of the signal's standard
 deviation.
 """
+
 import math
 import warnings
 
@@ -40,10 +41,10 @@ def literal_dam(phones_ab, labels, starts, ends, n_frames):
                 if t < 0:
                     D = math.exp(-t * t / (sigma[c] ** 2 + EPS))
                 elif t > 1:
-                    D = math.exp(-(t - 1) ** 2 / (sigma[c] ** 2 + EPS))
+                    D = math.exp(-((t - 1) ** 2) / (sigma[c] ** 2 + EPS))
                 else:
                     D = 1.0
-                A = sum(a[m, c] * t ** m for m in range(a.shape[0]))
+                A = sum(a[m, c] * t**m for m in range(a.shape[0]))
                 out[i, c] += D * A
     return out
 
@@ -51,13 +52,13 @@ def literal_dam(phones_ab, labels, starts, ends, n_frames):
 def make_literal_corpus(seed, n_utt, n_modes, n_ch=2):
     """Phones "a".."e" (and "sil"); phone "b" has ``n_modes`` modes chosen by its right neighbour."""
     rng = np.random.default_rng(seed)
-    par = np.random.default_rng(1234)          # the same true parameters for train and test
+    par = np.random.default_rng(1234)  # the same true parameters for train and test
     phones = ["sil", "a", "b", "c", "d", "e"]
     truth = {}
     for p in phones:
         for g in range(n_modes if p == "b" else 1):
             a = par.normal(0, 1, (5, n_ch)) * np.array([1.0, 1.5, 1.5, 1.0, 0.5])[:, None]
-            a[0] += 8.0 * g                    # modes far apart, so clustering can find them
+            a[0] += 8.0 * g  # modes far apart, so clustering can find them
             truth[(p, g)] = (a, par.uniform(0.25, 0.6, n_ch))
     utts = []
     for k in range(n_utt):
@@ -66,11 +67,13 @@ def make_literal_corpus(seed, n_utt, n_modes, n_ch=2):
         d = rng.uniform(0.07, 0.18, len(seq))
         ends = np.cumsum(d)
         n = int(round(ends[-1] * FR)) + 1
-        ends[-1] = (n - 1) / FR                  # the alignment ends at the last frame's time
+        ends[-1] = (n - 1) / FR  # the alignment ends at the last frame's time
         starts = np.r_[0.0, ends[:-1]]
         # "b" before a vowel-ish "a"/"e" is mode 1 (n_modes > 1), else mode 0
-        keys = [(p, int(n_modes > 1 and p == "b" and j + 1 < len(seq) and seq[j + 1] in ("a", "e")))
-                for j, p in enumerate(seq)]
+        keys = [
+            (p, int(n_modes > 1 and p == "b" and j + 1 < len(seq) and seq[j + 1] in ("a", "e")))
+            for j, p in enumerate(seq)
+        ]
         y = literal_dam(truth, keys, starts, ends, n)
         a = Alignment(seq, starts, ends, source=f"lit{k}")
         utts.append(Utterance(a, y, FR, [f"c{c}" for c in range(n_ch)], name=f"lit{k}"))
@@ -86,10 +89,10 @@ def _relative_rmse(model, corpus):
 def test_generator_is_eq_2_as_printed():
     """The generator itself, against a hand value: one phone, one frame inside, one in the tail."""
     a = np.zeros((5, 1))
-    a[0, 0], a[1, 0] = 1.0, 2.0                  # A(t) = 1 + 2t
+    a[0, 0], a[1, 0] = 1.0, 2.0  # A(t) = 1 + 2t
     truth = {("p", 0): (a, np.array([0.5]))}
     y = literal_dam(truth, [("p", 0)], [0.0], [0.1], 16)
-    assert y[5, 0] == pytest.approx(1 + 2 * 0.5)                                # t = 0.5: D = 1
+    assert y[5, 0] == pytest.approx(1 + 2 * 0.5)  # t = 0.5: D = 1
     assert y[15, 0] == pytest.approx(math.exp(-0.25 / (0.25 + EPS)) * (1 + 2 * 1.5))  # t = 1.5
 
 
@@ -98,14 +101,15 @@ def test_edges_no_padding_and_true_model_reproduces_literal_data():
     corpus = make_literal_corpus(0, 4, 1)
     for u in corpus:
         assert u.alignment.n_frames(FR) == u.n_frames
-        assert u.alignment.labels[-1] == "sil" and u.alignment.labels[-2] != "sil"   # no 10 ms pad
+        assert u.alignment.labels[-1] == "sil" and u.alignment.labels[-2] != "sil"  # no 10 ms pad
     par = np.random.default_rng(1234)
     phones = {}
     for p in ["sil", "a", "b", "c", "d", "e"]:
         a = par.normal(0, 1, (5, 2)) * np.array([1.0, 1.5, 1.5, 1.0, 0.5])[:, None]
         phones[p] = (a, par.uniform(0.25, 0.6, 2))
-    model = DAM.from_parameters(phones, frame_rate=FR, channels=["c0", "c1"], normalize=False, eps=EPS,
-                                dominance_tol=0.0)
+    model = DAM.from_parameters(
+        phones, frame_rate=FR, channels=["c0", "c1"], normalize=False, eps=EPS, dominance_tol=0.0
+    )
     for u, y in zip(corpus, model.predict(corpus.alignments)):
         np.testing.assert_allclose(y, u.trajectory, rtol=1e-9, atol=1e-9)
 
@@ -114,10 +118,18 @@ def test_edges_no_padding_and_true_model_reproduces_literal_data():
 def test_plain_sum_dam_recovers_literal_paper_data_held_out(n_modes):
     train = make_literal_corpus(1, 40, n_modes)
     test = make_literal_corpus(2, 12, n_modes)
-    model = DAM(normalize=False, eps=EPS, dominance_tol=1e-9, ridge=1e-12, tol=1e-9, max_iter=60,
-                modes="single" if n_modes == 1 else "affinity", min_occurrences=10)
+    model = DAM(
+        normalize=False,
+        eps=EPS,
+        dominance_tol=1e-9,
+        ridge=1e-12,
+        tol=1e-9,
+        max_iter=60,
+        modes="single" if n_modes == 1 else "affinity",
+        min_occurrences=10,
+    )
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")      # a ConvergenceWarning at max_iter is fine if the error is tiny
+        warnings.simplefilter("ignore")  # a ConvergenceWarning at max_iter is fine if the error is tiny
         model.fit(train)
     assert model.phone_modes_["b"][1] == n_modes
     err = _relative_rmse(model, test)

@@ -1,4 +1,5 @@
 """Fixtures of the reliability suite (issue 12): small corpora on disk and small model files."""
+
 import shutil
 
 import numpy as np
@@ -13,8 +14,15 @@ def small_corpus_dir(tmp_path):
     """A corpus directory: three utterances of the bundled tiny corpus and its corpus.json."""
     d = tmp_path / "corpus"
     d.mkdir()
-    for name in ("corpus.json", "tiny000.TextGrid", "tiny000.csv", "tiny001.TextGrid", "tiny001.csv",
-                 "tiny002.TextGrid", "tiny002.csv"):
+    for name in (
+        "corpus.json",
+        "tiny000.TextGrid",
+        "tiny000.csv",
+        "tiny001.TextGrid",
+        "tiny001.csv",
+        "tiny002.TextGrid",
+        "tiny002.csv",
+    ):
         shutil.copy(DATA / "tiny" / name, d / name)
     return d
 

@@ -1,6 +1,7 @@
 """Atomic saves (issue 12): a reader, a kill, a full disk or a second writer leaves the old
 file or the new one, never half of one. The kills and the full disk are real: subprocesses
 killed with SIGKILL mid-save, and a save under RLIMIT_FSIZE."""
+
 import os
 import signal
 import subprocess
@@ -39,8 +40,13 @@ def _table_seed(path) -> int:
 
 
 def _run(code: str, **kw) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-c", _BIG_MODEL + textwrap.dedent(code)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-c", _BIG_MODEL + textwrap.dedent(code)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kw,
+    )
 
 
 @pytest.fixture
@@ -159,11 +165,17 @@ def test_disk_full_during_save_leaves_the_old_model(old_model, tmp_path):
 
 
 def test_two_processes_saving_to_one_path_leave_one_complete_model(old_model, tmp_path):
-    procs = [_run(f"""
+    procs = [
+        _run(
+            f"""
         m = big({seed})
         for _ in range(2):
             m.save({str(old_model)!r})
-        """, env={**os.environ, "N_CHANNELS": "2000"}) for seed in (0, 1)]
+        """,
+            env={**os.environ, "N_CHANNELS": "2000"},
+        )
+        for seed in (0, 1)
+    ]
     for p in procs:
         out, err = p.communicate(timeout=120)
         assert p.returncode == 0, err
@@ -176,10 +188,13 @@ def test_every_writer_goes_through_the_atomic_helpers():
     """No writer in dam opens its output in place (the one mechanism, dam.corpus.atomic)."""
     import re
     from pathlib import Path
+
     root = Path(dam.__file__).parent
-    pattern = re.compile(r"open\([^)]*['\"](w|wb|a|x)['\"]|\.write_text\(|\.write_bytes\(|np\.save\(|"
-                         r"np\.savez|savetxt\(|\.savefig\(|\.tofile\(|wavfile\.write\(|soundfile\.write\(|"
-                         r"\btg\.save\(|json\.dump\(")
+    pattern = re.compile(
+        r"open\([^)]*['\"](w|wb|a|x)['\"]|\.write_text\(|\.write_bytes\(|np\.save\(|"
+        r"np\.savez|savetxt\(|\.savefig\(|\.tofile\(|wavfile\.write\(|soundfile\.write\(|"
+        r"\btg\.save\(|json\.dump\("
+    )
     allowed = {"corpus/atomic.py"}  # the mechanism itself; scratch files say "not an output"
     offenders = []
     for path in sorted(root.rglob("*.py")):
@@ -189,7 +204,7 @@ def test_every_writer_goes_through_the_atomic_helpers():
         lines = path.read_text(encoding="utf-8").splitlines()
         for lineno, line in enumerate(lines, 1):
             code = line.partition("#")[0]
-            marked = any("not an output" in w.partition("#")[2] for w in lines[max(0, lineno - 2):lineno])
+            marked = any("not an output" in w.partition("#")[2] for w in lines[max(0, lineno - 2) : lineno])
             if pattern.search(code) and ">>>" not in line and not marked:
                 offenders.append(f"{rel}:{lineno}: {line.strip()}")
     # writes into a handle from atomic_write/atomic_path are fine: list those lines here
@@ -203,5 +218,5 @@ def _through_atomic(root, offender: str) -> bool:
     rel, lineno, _ = offender.split(":", 2)
     lines = (root / rel).read_text(encoding="utf-8").splitlines()
     i = int(lineno) - 1
-    window = lines[max(0, i - 6):i + 1]
+    window = lines[max(0, i - 6) : i + 1]
     return any("atomic_write(" in w or "atomic_path(" in w or "atomic_directory(" in w for w in window)

@@ -4,6 +4,7 @@ file or the parameter, no output is left half-written, and no NaN reaches an out
 
 Bounded: a fixed number of examples per property, derandomized, the whole file in well under a
 minute."""
+
 import contextlib
 import hashlib
 import io
@@ -23,13 +24,23 @@ from dam.corpus.data import MAX_DURATION, TIME_TOL
 from dam.datasets import DATA
 from dam.modelfile import META_KEY, ModelFileError, read_model_file
 
-FUZZ = settings(max_examples=150, deadline=None, derandomize=True, database=None,
-                suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+FUZZ = settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 
-times = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.floats(0, 5),
-                  st.integers(-10, 10 ** 12), st.sampled_from([1e-7, 6e-7, 1e10, -0.0, 1e308]))
-labels = st.one_of(st.text(max_size=4), st.sampled_from(["sil", "", " sp ", "a", "b", "é", "\ufeffa"]),
-                   st.integers(), st.none())
+times = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(0, 5),
+    st.integers(-10, 10**12),
+    st.sampled_from([1e-7, 6e-7, 1e10, -0.0, 1e308]),
+)
+labels = st.one_of(
+    st.text(max_size=4), st.sampled_from(["sil", "", " sp ", "a", "b", "é", "\ufeffa"]), st.integers(), st.none()
+)
 
 
 # -- alignments and trajectories ---------------------------------------------------------------
@@ -48,11 +59,15 @@ def test_alignment_is_valid_or_a_data_error(segments):
     np.testing.assert_array_equal(a.starts[1:], a.ends[:-1])
 
 
-ragged = st.recursive(st.one_of(st.floats(), st.integers(-5, 5), st.text(max_size=2), st.none(),
-                                st.complex_numbers(max_magnitude=10)),
-                      lambda inner: st.lists(inner, max_size=4), max_leaves=12)
-arrays = hnp.arrays(dtype=st.sampled_from([np.float64, np.float32, np.int8, np.bool_, np.complex128, np.uint16]),
-                    shape=hnp.array_shapes(min_dims=0, max_dims=3, max_side=5))
+ragged = st.recursive(
+    st.one_of(st.floats(), st.integers(-5, 5), st.text(max_size=2), st.none(), st.complex_numbers(max_magnitude=10)),
+    lambda inner: st.lists(inner, max_size=4),
+    max_leaves=12,
+)
+arrays = hnp.arrays(
+    dtype=st.sampled_from([np.float64, np.float32, np.int8, np.bool_, np.complex128, np.uint16]),
+    shape=hnp.array_shapes(min_dims=0, max_dims=3, max_side=5),
+)
 
 
 @FUZZ
@@ -70,17 +85,18 @@ def test_utterance_is_valid_or_a_data_error(trajectory, channels):
 
 # -- corpus files -----------------------------------------------------------------------------------
 FILES = ["corpus.json", "tiny000.TextGrid", "tiny000.csv", "tiny001.TextGrid", "tiny001.csv"]
-json_values = st.recursive(st.one_of(st.none(), st.booleans(), st.floats(), st.integers(), st.text(max_size=5)),
-                           lambda inner: st.one_of(st.lists(inner, max_size=4),
-                                                   st.dictionaries(st.text(max_size=5), inner, max_size=4)),
-                           max_leaves=10)
+json_values = st.recursive(
+    st.one_of(st.none(), st.booleans(), st.floats(), st.integers(), st.text(max_size=5)),
+    lambda inner: st.one_of(st.lists(inner, max_size=4), st.dictionaries(st.text(max_size=5), inner, max_size=4)),
+    max_leaves=10,
+)
 
 
 def _mutate(raw: bytes, kind: str, pos: int, value) -> bytes:
     pos = pos % (len(raw) + 1)
     if kind == "flip":
         mask = (value if isinstance(value, int) else len(value)) % 255 + 1
-        return raw[:pos] + bytes([raw[pos] ^ mask]) + raw[pos + 1:] if pos < len(raw) else raw
+        return raw[:pos] + bytes([raw[pos] ^ mask]) + raw[pos + 1 :] if pos < len(raw) else raw
     if kind == "truncate":
         return raw[:pos]
     if kind == "bom":
@@ -94,14 +110,17 @@ def _mutate(raw: bytes, kind: str, pos: int, value) -> bytes:
             return raw
         i = digits[pos % len(digits)]
         repl = str(value) if not isinstance(value, str) else value
-        return (text[:i] + repl + text[i + 1:]).encode("utf-8")
+        return (text[:i] + repl + text[i + 1 :]).encode("utf-8")
     raise AssertionError(kind)
 
 
 @FUZZ
-@given(st.sampled_from(FILES), st.sampled_from(["flip", "truncate", "bom", "latin1", "number"]),
-       st.integers(0, 10 ** 6),
-       st.one_of(st.integers(0, 255), st.sampled_from(["9" * 400, "inf", "nan", "1e10", "-", "1e400", "é"])))
+@given(
+    st.sampled_from(FILES),
+    st.sampled_from(["flip", "truncate", "bom", "latin1", "number"]),
+    st.integers(0, 10**6),
+    st.one_of(st.integers(0, 255), st.sampled_from(["9" * 400, "inf", "nan", "1e10", "-", "1e400", "é"])),
+)
 def test_mutated_corpus_loads_or_names_the_file(name, kind, pos, value):
     with tempfile.TemporaryDirectory() as tmp:
         d = os.path.join(tmp, "corpus")
@@ -140,13 +159,19 @@ def test_any_corpus_json_loads_or_names_the_file(meta):
 
 
 # -- model files: crafted records --------------------------------------------------------------
-state_values = st.one_of(json_values, hnp.arrays(dtype=st.sampled_from([np.float64, np.int8, np.bool_, np.float32]),
-                                                 shape=hnp.array_shapes(min_dims=0, max_dims=3, max_side=4)))
+state_values = st.one_of(
+    json_values,
+    hnp.arrays(
+        dtype=st.sampled_from([np.float64, np.int8, np.bool_, np.float32]),
+        shape=hnp.array_shapes(min_dims=0, max_dims=3, max_side=4),
+    ),
+)
 
 
 @FUZZ
-@given(st.sampled_from(["frame_rate_", "channels_", "phone_counts_", "table_", "extra_", "model", "params"]),
-       state_values)
+@given(
+    st.sampled_from(["frame_rate_", "channels_", "phone_counts_", "table_", "extra_", "model", "params"]), state_values
+)
 def test_crafted_model_records_load_or_raise_model_file_error(micro_model_file, key, value):
     src, alignment, _ = micro_model_file
     meta, arrays = read_model_file(src)
@@ -172,7 +197,7 @@ def test_crafted_model_records_load_or_raise_model_file_error(micro_model_file, 
 
 
 @FUZZ
-@given(st.lists(st.tuples(st.integers(0, 10 ** 6), st.integers(1, 255)), min_size=1, max_size=4))
+@given(st.lists(st.tuples(st.integers(0, 10**6), st.integers(1, 255)), min_size=1, max_size=4))
 def test_model_file_with_random_byte_damage(phone_mean_file, flips):
     src, expected = phone_mean_file
     raw = bytearray(open(src, "rb").read())
@@ -201,6 +226,7 @@ def _digest(path):
 
 def _run_cli(argv):
     from dam.cli import main
+
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         try:
@@ -213,22 +239,45 @@ def _run_cli(argv):
 PATHS = ["MODEL", "ALIGN", "CORPUS", "CSV", "MISSING", "NODIR/x.out", "-", "", "DIR", "OUT.csv", "OUT.dam"]
 
 
-@settings(max_examples=80, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(st.sampled_from([
-    ["predict", "MODEL", "ALIGN", "-o", "P"], ["predict", "P", "ALIGN"], ["predict", "MODEL", "P", "-o", "P"],
-    ["evaluate", "P", "CORPUS"], ["evaluate", "MODEL", "P"], ["fit", "phone-mean", "CORPUS", "-o", "P"],
-    ["fit", "phone-mean", "P", "-o", "OUT.dam"], ["inspect", "P"], ["generate-tiny", "P"],
-    ["fit", "phone-mean", "CORPUS", "-o", "OUT.dam", "--param", "P"],
-]), st.sampled_from(PATHS + ["unknown_phone=guess", "colour=red", "unknown_phone=error", "x"]))
+@settings(
+    max_examples=80,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    st.sampled_from(
+        [
+            ["predict", "MODEL", "ALIGN", "-o", "P"],
+            ["predict", "P", "ALIGN"],
+            ["predict", "MODEL", "P", "-o", "P"],
+            ["evaluate", "P", "CORPUS"],
+            ["evaluate", "MODEL", "P"],
+            ["fit", "phone-mean", "CORPUS", "-o", "P"],
+            ["fit", "phone-mean", "P", "-o", "OUT.dam"],
+            ["inspect", "P"],
+            ["generate-tiny", "P"],
+            ["fit", "phone-mean", "CORPUS", "-o", "OUT.dam", "--param", "P"],
+        ]
+    ),
+    st.sampled_from(PATHS + ["unknown_phone=guess", "colour=red", "unknown_phone=error", "x"]),
+)
 def test_command_lines_never_trace_back_or_damage_inputs(micro_model_file, small_corpus_dir, argv, pick):
     root = str(small_corpus_dir.parent)
     src = os.path.join(root, "m.dam")
     shutil.copy(micro_model_file[0], src)
-    names = {"MODEL": str(src), "ALIGN": str(small_corpus_dir / "tiny000.TextGrid"), "CORPUS": str(small_corpus_dir),
-             "CSV": str(small_corpus_dir / "tiny000.csv"), "MISSING": os.path.join(root, "missing.TextGrid"),
-             "NODIR/x.out": os.path.join(root, "nodir", "x.out"), "DIR": root,
-             "OUT.csv": os.path.join(root, "out.csv"), "OUT.dam": os.path.join(root, "out.dam")}
+    names = {
+        "MODEL": str(src),
+        "ALIGN": str(small_corpus_dir / "tiny000.TextGrid"),
+        "CORPUS": str(small_corpus_dir),
+        "CSV": str(small_corpus_dir / "tiny000.csv"),
+        "MISSING": os.path.join(root, "missing.TextGrid"),
+        "NODIR/x.out": os.path.join(root, "nodir", "x.out"),
+        "DIR": root,
+        "OUT.csv": os.path.join(root, "out.csv"),
+        "OUT.dam": os.path.join(root, "out.dam"),
+    }
     argv = [names.get(a, a) for a in argv]
     argv = [names.get(pick, pick) if a == "P" else a for a in argv]
     # the inputs: every existing path on the command line but the output (a file after -o may be replaced)

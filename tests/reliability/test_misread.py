@@ -1,6 +1,7 @@
 """Misread data (issue 12): byte-order marks, other encodings, complex and ragged values,
 absurd times, corpus.json of the wrong shape. Each is read correctly or refused with
 dam's own error naming the file, the field and the value."""
+
 import codecs
 import json
 import os
@@ -39,9 +40,15 @@ def test_csv_with_a_bom_and_no_corpus_json_gets_its_rate_from_the_time_column(sm
     assert c.frame_rate == 100.0 and c.channels[0] == "lip_aperture"
 
 
-@pytest.mark.parametrize("encode", [lambda t: BOM + t.encode("utf-8"), lambda t: t.encode("utf-16"),
-                                    lambda t: t.encode("utf-16-be") and codecs.BOM_UTF16_BE + t.encode("utf-16-be")],
-                         ids=["utf8-bom", "utf16", "utf16-be"])
+@pytest.mark.parametrize(
+    "encode",
+    [
+        lambda t: BOM + t.encode("utf-8"),
+        lambda t: t.encode("utf-16"),
+        lambda t: t.encode("utf-16-be") and codecs.BOM_UTF16_BE + t.encode("utf-16-be"),
+    ],
+    ids=["utf8-bom", "utf16", "utf16-be"],
+)
 def test_textgrid_in_any_marked_encoding_reads_the_same(small_corpus_dir, tmp_path, encode):
     src = small_corpus_dir / "tiny000.TextGrid"
     text = src.read_text(encoding="utf-8").replace('text = "p"', 'text = "é"')
@@ -63,17 +70,23 @@ def test_lab_and_corpus_json_with_a_bom(small_corpus_dir, tmp_path):
 
 
 # -- other encodings: refused with the file and the byte offset ---------------------------------
-@pytest.mark.parametrize("name, content", [
-    ("u.lab", b"0 1000000 a\n1000000 2500000 caf\xe9\n"),
-    ("u.csv", b"time,l\xe8vre\n0,1\n0.01,2\n"),
-    ("corpus.json", b'{"name": "d\xe9j\xe0"}'),
-])
+@pytest.mark.parametrize(
+    "name, content",
+    [
+        ("u.lab", b"0 1000000 a\n1000000 2500000 caf\xe9\n"),
+        ("u.csv", b"time,l\xe8vre\n0,1\n0.01,2\n"),
+        ("corpus.json", b'{"name": "d\xe9j\xe0"}'),
+    ],
+)
 def test_latin1_text_is_refused_naming_file_and_offset(tmp_path, name, content):
     path = tmp_path / name
     path.write_bytes(content)
     offset = content.index(next(bytes([b]) for b in content if b > 0x7F))
-    reader = {"u.lab": read_lab, "u.csv": dam.corpus.formats.tables.read_csv,
-              "corpus.json": dam.corpus.io.read_corpus_json}[name]
+    reader = {
+        "u.lab": read_lab,
+        "u.csv": dam.corpus.formats.tables.read_csv,
+        "corpus.json": dam.corpus.io.read_corpus_json,
+    }[name]
     with pytest.raises(dam.DataError) as info:
         reader(path)
     msg = str(info.value)
@@ -103,13 +116,17 @@ def test_complex_trajectories_are_refused(small_corpus_dir):
     assert ".npy" in str(info.value)
 
 
-@pytest.mark.parametrize("trajectory", [
-    [[1.0, 2.0], [3.0]],                              # ragged
-    [[1.0], [None], [2.0]],                           # None inside
-    np.array([[1.0], ["x"]], dtype=object),           # object with text
-    "12345",                                          # text
-    [[{"a": 1}]],                                     # nonsense
-], ids=["ragged", "none", "object-text", "text", "dict"])
+@pytest.mark.parametrize(
+    "trajectory",
+    [
+        [[1.0, 2.0], [3.0]],  # ragged
+        [[1.0], [None], [2.0]],  # None inside
+        np.array([[1.0], ["x"]], dtype=object),  # object with text
+        "12345",  # text
+        [[{"a": 1}]],  # nonsense
+    ],
+    ids=["ragged", "none", "object-text", "text", "dict"],
+)
 def test_ragged_and_object_trajectories_get_a_data_error(trajectory):
     a = dam.Alignment(["a"], [0], [0.02])
     with pytest.raises(dam.DataError, match="trajectory") as info:
@@ -142,7 +159,7 @@ def test_infinite_xwaves_time_names_file(tmp_path):
 
 def test_a_1e10_second_segment_is_refused_before_any_allocation(tmp_path):
     path = tmp_path / "u.lab"
-    path.write_text(f"0 1000000 a\n1000000 {10 ** 17} b\n")  # 1e10 s
+    path.write_text(f"0 1000000 a\n1000000 {10**17} b\n")  # 1e10 s
     with pytest.raises(dam.DataError, match="more than") as info:
         read_lab(path)
     assert str(path) in str(info.value) and "segment 1" in str(info.value)
@@ -163,17 +180,20 @@ def test_a_sub_microsecond_segment_is_never_kept(tmp_path):
 
 
 # -- corpus.json of the wrong shape ------------------------------------------------------------------------
-@pytest.mark.parametrize("meta, field", [
-    ({"channels": 5}, "channels"),
-    ({"channels": ["a", 3, "c", "d"]}, "channels"),
-    ({"channels": ["a", "a", "b", "c"]}, "channels"),
-    ({"frame_rate": "abc"}, "frame_rate"),
-    ({"frame_rate": -100}, "frame_rate"),
-    ({"frame_rate": True}, "frame_rate"),
-    ({"frame_rate": float("inf")}, "frame_rate"),
-    ({"name": ["x"]}, "name"),
-    ([1, 2, 3], "json"),
-])
+@pytest.mark.parametrize(
+    "meta, field",
+    [
+        ({"channels": 5}, "channels"),
+        ({"channels": ["a", 3, "c", "d"]}, "channels"),
+        ({"channels": ["a", "a", "b", "c"]}, "channels"),
+        ({"frame_rate": "abc"}, "frame_rate"),
+        ({"frame_rate": -100}, "frame_rate"),
+        ({"frame_rate": True}, "frame_rate"),
+        ({"frame_rate": float("inf")}, "frame_rate"),
+        ({"name": ["x"]}, "name"),
+        ([1, 2, 3], "json"),
+    ],
+)
 def test_corpus_json_type_errors_name_file_field_and_value(small_corpus_dir, meta, field):
     path = small_corpus_dir / "corpus.json"
     path.write_text(json.dumps(meta))
@@ -218,6 +238,7 @@ def test_a_prediction_too_large_to_hold_is_refused_before_allocation(tiny_train)
     """A day at the highest frame rate a model may have: refused, naming the duration."""
     from dam.base import MAX_PREDICTION_VALUES
     from dam.corpus.data import MAX_FRAME_RATE
+
     model = dam.make("phone-mean").fit(tiny_train)
     model.frame_rate_ = MAX_FRAME_RATE
     long = dam.Alignment(["aa"], [0.0], [MAX_DURATION], source="day.lab")

@@ -1,6 +1,7 @@
 """Model files that are not what they claim (issue 12): every value checked at load against
 the class's declared state, archive sizes checked before allocation, and every byte flip or
 truncation of a real file a ModelFileError naming the path (or the same predictions)."""
+
 import io
 import json
 import struct
@@ -61,21 +62,37 @@ def test_a_phone_mean_record_relabelled_dam_is_refused(phone_mean_file, tmp_path
     _refused(bad, "not a complete DAM")
 
 
-@pytest.mark.parametrize("edit, words", [
-    (lambda m: m["state"].__setitem__("phone_counts_", {"a": 0}), ["state.phone_counts_"]),
-    (lambda m: m["state"].__setitem__("channels_", ["x", "x", "y", "z"]), ["state.channels_", "repeats"]),
-    (lambda m: m["state"].__setitem__("channels_", ["x"]), ["state.table_", "n_channels"]),
-    (lambda m: m["state"].__setitem__("predict_", 1), ["predict_"]),
-    (lambda m: m["state"].__setitem__("phones_", ["a"]), ["phones_"]),
-    (lambda m: m["state"].__setitem__("__class__", "x"), ["__class__"]),
-    (lambda m: m["state"].pop("table_"), ["state.table_", "missing"]),
-    (lambda m: m["state"].__setitem__("table_", {"__array__": "nope"}), ["nope"]),
-    (lambda m: m["params"].__setitem__("unknown_phone", "guess"), ["unknown_phone"]),
-    (lambda m: m["params"].__setitem__("colour", "red"), ["params"]),
-    (lambda m: m.__setitem__("model", ["phone-mean"]), ["model"]),
-    (lambda m: m.__setitem__("version", True), ["version"]),
-], ids=["zero-count", "duplicate-channels", "shape-mismatch", "extra-attribute", "property", "dunder",
-        "missing", "dangling-array", "bad-param", "unknown-param", "model-not-str", "version-bool"])
+@pytest.mark.parametrize(
+    "edit, words",
+    [
+        (lambda m: m["state"].__setitem__("phone_counts_", {"a": 0}), ["state.phone_counts_"]),
+        (lambda m: m["state"].__setitem__("channels_", ["x", "x", "y", "z"]), ["state.channels_", "repeats"]),
+        (lambda m: m["state"].__setitem__("channels_", ["x"]), ["state.table_", "n_channels"]),
+        (lambda m: m["state"].__setitem__("predict_", 1), ["predict_"]),
+        (lambda m: m["state"].__setitem__("phones_", ["a"]), ["phones_"]),
+        (lambda m: m["state"].__setitem__("__class__", "x"), ["__class__"]),
+        (lambda m: m["state"].pop("table_"), ["state.table_", "missing"]),
+        (lambda m: m["state"].__setitem__("table_", {"__array__": "nope"}), ["nope"]),
+        (lambda m: m["params"].__setitem__("unknown_phone", "guess"), ["unknown_phone"]),
+        (lambda m: m["params"].__setitem__("colour", "red"), ["params"]),
+        (lambda m: m.__setitem__("model", ["phone-mean"]), ["model"]),
+        (lambda m: m.__setitem__("version", True), ["version"]),
+    ],
+    ids=[
+        "zero-count",
+        "duplicate-channels",
+        "shape-mismatch",
+        "extra-attribute",
+        "property",
+        "dunder",
+        "missing",
+        "dangling-array",
+        "bad-param",
+        "unknown-param",
+        "model-not-str",
+        "version-bool",
+    ],
+)
 def test_crafted_records_name_the_field(phone_mean_file, tmp_path, edit, words):
     src, _ = phone_mean_file
     _refused(_rewrite(src, tmp_path / "crafted.dam", edit), *words)
@@ -110,7 +127,7 @@ def test_an_npy_header_declaring_1e11_elements_is_refused_before_allocation(phon
     src, _ = phone_mean_file
     key = _table_key(src)
     buf = io.BytesIO()
-    np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False, "shape": (10 ** 11,)})
+    np.lib.format.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False, "shape": (10**11,)})
     member = buf.getvalue() + b"\0" * 64
     bad = tmp_path / "huge.dam"
     with zipfile.ZipFile(src) as zin, zipfile.ZipFile(bad, "w", zipfile.ZIP_DEFLATED) as zout:
@@ -124,7 +141,7 @@ def test_a_zip_bomb_is_refused_from_its_declared_sizes(phone_mean_file, tmp_path
     src, _ = phone_mean_file
     raw = bytearray(src.read_bytes())
     pos = raw.index(b"PK\x01\x02")  # first central-directory entry; uncompressed size at +24
-    raw[pos + 24:pos + 28] = struct.pack("<I", 2 ** 30)
+    raw[pos + 24 : pos + 28] = struct.pack("<I", 2**30)
     bad = tmp_path / "bomb.dam"
     bad.write_bytes(bytes(raw))
     _refused(bad, "declares", "refused before reading")
@@ -134,7 +151,7 @@ def test_a_real_zip_bomb_is_refused(tmp_path):
     """64 MiB of zeros compress to ~64 kB: over the limit of 64 MiB + 50x the file size."""
     bad = tmp_path / "zeros.dam"
     with open(bad, "wb") as fh:
-        np.savez_compressed(fh, a0=np.zeros(2 ** 23 + 2 ** 20))
+        np.savez_compressed(fh, a0=np.zeros(2**23 + 2**20))
     assert bad.stat().st_size < 200_000
     _refused(bad, "refused before reading")
 
@@ -192,6 +209,7 @@ def test_a_model_whose_state_breaks_its_schema_is_not_written(tiny_train, tmp_pa
 def test_every_numpy_runtime_model_declares_its_state():
     """A model a runtime loads with numpy alone must say what its file holds."""
     from dam.modelfile import _declares_schema
+
     for name in dam.registry.names():
         ok, _ = dam.registry.available(name)
         if ok and dam.registry.get(name).get_tags()["numpy_runtime"]:

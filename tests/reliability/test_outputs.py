@@ -1,5 +1,6 @@
 """Outputs never overwrite inputs silently (issue 12): every command checks its output paths
 before any work starts; `-o -` is standard output where the format allows it, else refused."""
+
 import contextlib
 import io
 import os
@@ -60,8 +61,9 @@ def test_predict_refuses_to_replace_recorded_data_beside_an_alignment(model_file
     assert target.read_bytes() == before
 
 
-def test_predict_replaces_its_own_earlier_output_and_corpus_files_only_with_overwrite(model_file, small_corpus_dir,
-                                                                                     tmp_path):
+def test_predict_replaces_its_own_earlier_output_and_corpus_files_only_with_overwrite(
+    model_file, small_corpus_dir, tmp_path
+):
     alignment = small_corpus_dir / "tiny000.TextGrid"
     out = tmp_path / "prediction.csv"
     for _ in range(2):  # an output that is no corpus's data is simply replaced (atomically)
@@ -102,11 +104,16 @@ def test_fit_to_standard_output_is_refused():
     assert not os.path.exists("-")
 
 
-@pytest.mark.parametrize("model, param, name", [
-    ("dam", "degree=true", "degree"), ("cohen-massaro", "ridge=abc", "ridge"),
-    ("cohen-massaro", "max_nfev=-1", "max_nfev"), ("dam", "dominance_tol=2", "dominance_tol"),
-    ("mmm", "smoothness=abc", "smoothness"),
-])
+@pytest.mark.parametrize(
+    "model, param, name",
+    [
+        ("dam", "degree=true", "degree"),
+        ("cohen-massaro", "ridge=abc", "ridge"),
+        ("cohen-massaro", "max_nfev=-1", "max_nfev"),
+        ("dam", "dominance_tol=2", "dominance_tol"),
+        ("mmm", "smoothness=abc", "smoothness"),
+    ],
+)
 def test_bad_hyperparameters_name_the_parameter_and_write_nothing(tmp_path, model, param, name):
     out = tmp_path / "m.dam"
     code, _, err = run("fit", model, "tiny", "-o", out, "--param", param)
@@ -125,8 +132,7 @@ def test_compare_refuses_to_write_into_a_corpus(tmp_path):
     code, _, err = run("compare", "--models", "phone-mean", "--train", "tiny", "--out", d)
     assert code == 1
     _one_error_line(err, "holds a corpus")
-    assert (d / "summary.csv").read_bytes() == before and sorted(os.listdir(d)) == ["summary.TextGrid",
-                                                                                    "summary.csv"]
+    assert (d / "summary.csv").read_bytes() == before and sorted(os.listdir(d)) == ["summary.TextGrid", "summary.csv"]
     code, _, err = run("compare", "--models", "phone-mean", "--train", d, "--out", d)
     assert code == 1
     _one_error_line(err, "input")
@@ -160,8 +166,14 @@ def test_crossmap_refuses_a_directory_holding_files_before_any_work(tmp_path):
 def test_two_fits_saving_to_one_path_leave_a_model_that_loads(tmp_path):
     out = tmp_path / "same.dam"
     cli = "import sys; from dam.cli import main; sys.exit(main())"
-    procs = [subprocess.Popen([sys.executable, "-c", cli, "-q", "fit", "phone-mean", "tiny", "-o", str(out)],
-                              stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", cli, "-q", "fit", "phone-mean", "tiny", "-o", str(out)],
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for _ in range(2)
+    ]
     for p in procs:
         assert p.wait(120) == 0, p.stderr.read()
     assert dam.load(out).table_.shape[1] == 4

@@ -11,6 +11,7 @@ median phone-onset error at most 25 ms, 80% of onsets within 60 ms; word
 onsets: median at most 25 ms. Measured when written: 13 ms median phone onset
 error, 9 ms median word onset error.
 """
+
 import json
 from pathlib import Path
 
@@ -24,8 +25,9 @@ from dam.speech.aligner import FORCED, PHONE_RECOGNITION, onset_errors
 
 DATA = Path(__file__).parent.parent / "data" / "speech"
 NAMES = ["birch", "glue", "well", "chicken", "blicket"]
-CMU_PHONES = set("AA AE AH AO AW AY B CH D DH EH ER EY F G HH IH IY JH K L M N NG OW OY P R S SH T TH "
-                 "UH UW V W Y Z ZH".split())
+CMU_PHONES = set(
+    "AA AE AH AO AW AY B CH D DH EH ER EY F G HH IH IY JH K L M N NG OW OY P R S SH T TH UH UW V W Y Z ZH".split()
+)
 
 
 def _truth(name):
@@ -80,6 +82,7 @@ def test_array_input_at_another_rate_gives_the_same_alignment(aligned):
 
 def test_textgrid_has_words_and_phones_and_praat_reads_it(aligned, tmp_path):
     from praatio import textgrid
+
     path = tmp_path / "speech.TextGrid"
     aligned["glue"].write_textgrid(path)
     tg = textgrid.openTextgrid(str(path), includeEmptyIntervals=True)
@@ -93,8 +96,10 @@ def test_textgrid_has_words_and_phones_and_praat_reads_it(aligned, tmp_path):
 
 def test_wrong_transcript_is_an_alignment_error_naming_the_file():
     with pytest.raises(AlignmentError) as err:
-        align(DATA / "birch.wav", "The birch canoe slid on the smooth planks and then sank to the bottom "
-                                  "of the lake under the ice.")
+        align(
+            DATA / "birch.wav",
+            "The birch canoe slid on the smooth planks and then sank to the bottom of the lake under the ice.",
+        )
     assert "birch.wav" in str(err.value)
 
 

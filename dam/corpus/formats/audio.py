@@ -6,6 +6,7 @@ Only the header is read here, with the standard library (``wave`` for WAV,
 the STREAMINFO block for FLAC), so loading a corpus needs no audio library;
 the samples are read by whoever needs them (``soundfile``, the ``audio`` extra).
 """
+
 from __future__ import annotations
 
 import os
@@ -25,7 +26,7 @@ def _flac_header(path: str) -> tuple[int, int, int]:
     # "fLaC", then the first metadata block, which must be STREAMINFO (type 0, 34 bytes).
     if len(head) < 42 or head[:4] != b"fLaC" or (head[4] & 0x7F) != 0:
         raise DataError(path, "audio", os.path.basename(path), "not a FLAC file (no fLaC STREAMINFO header)")
-    info = int.from_bytes(head[8 + 10:8 + 18], "big")  # sample rate 20 bits, channels-1 3, bps-1 5, samples 36
+    info = int.from_bytes(head[8 + 10 : 8 + 18], "big")  # sample rate 20 bits, channels-1 3, bps-1 5, samples 36
     rate = info >> 44
     channels = ((info >> 41) & 0x7) + 1
     n_samples = info & ((1 << 36) - 1)
@@ -92,6 +93,7 @@ class AudioClip:
         import numpy as np
 
         from ..data import real_array
+
         x = real_array(samples, name or "<audio>", "samples")
         if x.ndim == 2:
             x = x.mean(axis=1)
@@ -114,6 +116,7 @@ class AudioClip:
     def n_frames(self, frame_rate: float) -> int:
         """Frames at ``i / frame_rate`` up to the end of the audio: ``floor(duration * frame_rate) + 1``."""
         from ..data import _n_frames
+
         return _n_frames(self.duration, frame_rate)
 
     def __repr__(self) -> str:

@@ -23,6 +23,7 @@ comes from ``sample_rate=``, else from the WAV file with the same stem.
 :func:`write_par` writes a minimal BPF file (LHD, SAM, LBD, MAU, and ORT when
 words are given) that :func:`read_par` reads back.
 """
+
 from __future__ import annotations
 
 import os
@@ -44,6 +45,7 @@ def read_par_tiers(path) -> tuple[dict, dict]:
     """``(header, tiers)`` of a BPF file: header key -> value; tier key -> list of (line number, fields)."""
     path = os.fspath(path)
     from dam.corpus.encoding import read_text
+
     lines = read_text(path).splitlines()  # UTF-8 (BOM dropped); other bytes refused with their offset
     header: dict = {}
     tiers: dict = {}
@@ -70,6 +72,7 @@ def _wav_rate(path: Path) -> float | None:
     if not wav.exists():
         return None
     import wave
+
     try:
         with wave.open(str(wav), "rb") as w:
             return float(w.getframerate())
@@ -109,8 +112,13 @@ def read_par(path, *, tier: str = "MAU", sample_rate: float | None = None, silen
     if rate is None:
         rate = sample_rate if sample_rate is not None else _wav_rate(p)
         if rate is None:
-            raise DataError(path, "SAM", None, "the sample rate is unknown",
-                            f"add a 'SAM: <rate>' header line, put {p.stem}.wav beside the file, or pass sample_rate=")
+            raise DataError(
+                path,
+                "SAM",
+                None,
+                "the sample rate is unknown",
+                f"add a 'SAM: <rate>' header line, put {p.stem}.wav beside the file, or pass sample_rate=",
+            )
     try:
         rate = float(rate)
     except (TypeError, ValueError):
@@ -127,8 +135,12 @@ def read_par(path, *, tier: str = "MAU", sample_rate: float | None = None, silen
         try:
             begin, dur, _word = int(parts[0]), int(parts[1]), int(parts[2].split(",")[0])
         except ValueError:
-            raise DataError(path, f"line {lineno} ({tier}) begin/duration/word", " ".join(parts[:3]),
-                            "must be whole numbers (samples, samples, word number)") from None
+            raise DataError(
+                path,
+                f"line {lineno} ({tier}) begin/duration/word",
+                " ".join(parts[:3]),
+                "must be whole numbers (samples, samples, word number)",
+            ) from None
         if begin < 0 or dur < 0:
             raise DataError(path, f"line {lineno} ({tier}) begin/duration", (begin, dur), "must not be negative")
         label = parts[3].strip()
@@ -183,8 +195,12 @@ def write_par(alignment: Alignment, path, sample_rate: float, *, words=None, hea
     for i, lab in enumerate(alignment.labels):
         begin, end = int(bounds[i]), int(bounds[i + 1])
         if end - begin < 1:
-            raise DataError(path, f"segment {i} ({lab!r})", (alignment.starts[i], alignment.ends[i]),
-                            f"shorter than one sample at {rate:g} samples/s")
+            raise DataError(
+                path,
+                f"segment {i} ({lab!r})",
+                (alignment.starts[i], alignment.ends[i]),
+                f"shorter than one sample at {rate:g} samples/s",
+            )
         if lab == alignment.silence:
             word, lab = -1, "<p:>"
         elif words is not None:

@@ -21,6 +21,7 @@ layout                  recognised by
 
 ``bas`` is an alias of ``directory``: BAS Partitur files are alignments there.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -59,8 +60,12 @@ def detect_format(path) -> str:
     if p.is_file():
         if p.name.endswith("_bndl.json"):
             return "emu"
-        raise DataError(os.fspath(path), "path", os.fspath(path),
-                        "not a corpus directory (a single file is read only as an EMU _bndl.json bundle)")
+        raise DataError(
+            os.fspath(path),
+            "path",
+            os.fspath(path),
+            "not a corpus directory (a single file is read only as an EMU _bndl.json bundle)",
+        )
     if not p.is_dir():
         raise DataError(os.fspath(path), "path", os.fspath(path), "not a directory")
     names = [q.name for q in p.iterdir()]
@@ -73,6 +78,7 @@ def detect_format(path) -> str:
         return "xrmb"
     if ".ema" in suffixes:
         from dam.corpus.formats.mocha import looks_like_mocha
+
         emas = sorted(q for q in p.iterdir() if q.suffix.lower() == ".ema")
         if looks_like_mocha(emas[0]):
             return "mocha"
@@ -84,8 +90,9 @@ def detect_format(path) -> str:
 def load_formatted(fmt: str, path, **options):
     """Run the loader of layout ``fmt`` on ``path`` with ``options`` (see each loader)."""
     if fmt not in CORPUS_FORMATS:
-        raise DataError(os.fspath(path), "format", fmt, "unknown corpus format",
-                        f"formats: {', '.join(CORPUS_FORMATS)}")
+        raise DataError(
+            os.fspath(path), "format", fmt, "unknown corpus format", f"formats: {', '.join(CORPUS_FORMATS)}"
+        )
     spec = CORPUS_FORMATS[fmt]
     if spec is None:
         raise ValueError(f"format {fmt!r} is read by dam.corpus.io.load_corpus itself")

@@ -44,6 +44,7 @@ channels ``<column>`` (k = 1) or ``<column>_T1 .. <column>_Tk`` (emuR's
 ``T1 .. Tk`` naming of track columns). Values are kept in the file's unit
 (SSFF records none).
 """
+
 from __future__ import annotations
 
 import base64
@@ -59,8 +60,17 @@ from dam.corpus.atomic import atomic_write
 from dam.corpus.data import SILENCE, Alignment, DataError
 from dam.corpus.formats.tracks import Track, build_corpus
 
-__all__ = ["SsffFile", "read_ssff", "parse_ssff", "write_ssff", "read_annot", "annot_alignment",
-           "read_bundle_json", "load_emu_corpus", "SSFF_TYPES"]
+__all__ = [
+    "SsffFile",
+    "read_ssff",
+    "parse_ssff",
+    "write_ssff",
+    "read_annot",
+    "annot_alignment",
+    "read_bundle_json",
+    "load_emu_corpus",
+    "SSFF_TYPES",
+]
 
 SSFF_MAGIC = "SSFF -- (c) SHLRC"
 SSFF_END = "-----------------"
@@ -86,6 +96,7 @@ class SsffFile:
     extra : dict of str to (str, str)
         Optional header lines ``NAME TYPE VALUE``, e.g. ``Original_Freq``.
     """
+
     columns: dict
     record_freq: float
     start_time: float = 0.0
@@ -120,11 +131,12 @@ def parse_ssff(raw: bytes, source: str) -> SsffFile:
     """Parse the bytes of an SSFF file (see the module docstring); DataError names ``source``."""
     end = raw.find((SSFF_END + "\n").encode())
     if not raw.startswith(SSFF_MAGIC.encode()):
-        raise DataError(source, "header", raw[:20].decode("latin-1"),
-                        f"not an SSFF file (the first line must be {SSFF_MAGIC!r})")
+        raise DataError(
+            source, "header", raw[:20].decode("latin-1"), f"not an SSFF file (the first line must be {SSFF_MAGIC!r})"
+        )
     if end < 0:
         raise DataError(source, "header", SSFF_END, "the header has no end line")
-    body = raw[end + len(SSFF_END) + 1:]
+    body = raw[end + len(SSFF_END) + 1 :]
     machine, rate, start = None, None, 0.0
     cols: list[tuple[str, str, int]] = []
     extra: dict = {}
@@ -170,13 +182,15 @@ def parse_ssff(raw: bytes, source: str) -> SsffFile:
     order = _MACHINES[machine]
     dtype = np.dtype([(name, f"{order}{SSFF_TYPES[typ]}", (k,)) for name, typ, k in cols])
     if len(body) % dtype.itemsize:
-        raise DataError(source, "data size", f"{len(body)} bytes",
-                        f"not a whole number of {dtype.itemsize}-byte records "
-                        f"({', '.join(f'{n} {t} x{k}' for n, t, k in cols)})")
+        raise DataError(
+            source,
+            "data size",
+            f"{len(body)} bytes",
+            f"not a whole number of {dtype.itemsize}-byte records ({', '.join(f'{n} {t} x{k}' for n, t, k in cols)})",
+        )
     records = np.frombuffer(body, dtype=dtype)
     columns = {name: np.array(records[name]).reshape(len(records), k) for name, _, k in cols}
-    return SsffFile(columns=columns, record_freq=float(rate), start_time=float(start), machine=machine,
-                    extra=extra)
+    return SsffFile(columns=columns, record_freq=float(rate), start_time=float(start), machine=machine, extra=extra)
 
 
 def read_ssff(path) -> SsffFile:
@@ -199,8 +213,9 @@ def _format_number(x: float) -> str:
     return text if "e" in text or "." in text else text + ".0"
 
 
-def write_ssff(path, columns, record_freq: float, *, start_time: float = 0.0, types=None,
-               machine: str = "IBM-PC", extra=None) -> None:
+def write_ssff(
+    path, columns, record_freq: float, *, start_time: float = 0.0, types=None, machine: str = "IBM-PC", extra=None
+) -> None:
     """Write an SSFF file (atomically: a temporary file, then rename).
 
     Parameters
@@ -246,8 +261,12 @@ def write_ssff(path, columns, record_freq: float, *, start_time: float = 0.0, ty
         arrays[name] = (typ, a)
     if not arrays:
         raise DataError(path, "columns", 0, "need at least one column")
-    lines = [SSFF_MAGIC, f"Machine {machine}", f"Record_Freq {_format_number(record_freq)}",
-             f"Start_Time {_format_number(start_time)}"]
+    lines = [
+        SSFF_MAGIC,
+        f"Machine {machine}",
+        f"Record_Freq {_format_number(record_freq)}",
+        f"Start_Time {_format_number(start_time)}",
+    ]
     lines += [f"Column {name} {typ} {a.shape[1]}" for name, (typ, a) in arrays.items()]
     lines += [f"{k} {t} {v}" for k, (t, v) in (extra or {}).items()]
     lines.append(SSFF_END)
@@ -263,6 +282,7 @@ def write_ssff(path, columns, record_freq: float, *, start_time: float = 0.0, ty
 # -- annotations ------------------------------------------------------------
 def _load_json(path: str):
     from dam.corpus.encoding import read_text
+
     try:
         return json.loads(read_text(path))  # UTF-8 (BOM dropped); other bytes refused with their offset
     except json.JSONDecodeError as exc:
@@ -290,11 +310,16 @@ def _check_annot(annot, source: str) -> dict:
         raise DataError(source, "levels", type(annot["levels"]).__name__, "must be a list")
     for i, level in enumerate(annot["levels"]):
         if not isinstance(level, dict) or "name" not in level or "items" not in level:
-            raise DataError(source, f"levels[{i}]", level if not isinstance(level, dict) else sorted(level),
-                            "a level needs 'name', 'type' and 'items'")
+            raise DataError(
+                source,
+                f"levels[{i}]",
+                level if not isinstance(level, dict) else sorted(level),
+                "a level needs 'name', 'type' and 'items'",
+            )
         if level.get("type") not in ("ITEM", "SEGMENT", "EVENT"):
-            raise DataError(source, f"levels[{i}] ({level['name']!r}) type", level.get("type"),
-                            "must be ITEM, SEGMENT or EVENT")
+            raise DataError(
+                source, f"levels[{i}] ({level['name']!r}) type", level.get("type"), "must be ITEM, SEGMENT or EVENT"
+            )
     return annot
 
 
@@ -311,8 +336,9 @@ def _lowest_segment_level(annot: dict, link_definitions=None) -> str:
     return max(segs, key=lambda s: (sizes[s], segs.index(s)))
 
 
-def annot_alignment(annot: dict, *, level: str | None = None, source: str | None = None,
-                    link_definitions=None, silence: str = SILENCE) -> Alignment:
+def annot_alignment(
+    annot: dict, *, level: str | None = None, source: str | None = None, link_definitions=None, silence: str = SILENCE
+) -> Alignment:
     """The phone alignment of one ``_annot.json`` document.
 
     Parameters
@@ -354,8 +380,14 @@ def annot_alignment(annot: dict, *, level: str | None = None, source: str | None
         for fld, v in (("sampleStart", s), ("sampleDur", d)):
             if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0 or v != int(v):
                 raise DataError(source, f"{where} {fld}", v, "must be a whole number of samples >= 0")
-        value = next((lab.get("value", "") for lab in item.get("labels", [])
-                      if isinstance(lab, dict) and lab.get("name") == chosen), None)
+        value = next(
+            (
+                lab.get("value", "")
+                for lab in item.get("labels", [])
+                if isinstance(lab, dict) and lab.get("name") == chosen
+            ),
+            None,
+        )
         if value is None:
             raise DataError(source, f"{where} labels", item.get("labels"), f"no label named {chosen!r}")
         labels.append(value)
@@ -371,8 +403,12 @@ def read_bundle_json(path) -> tuple[dict, list[tuple[str, SsffFile]]]:
     path = os.fspath(path)
     doc = _load_json(path)
     if not isinstance(doc, dict) or "annotation" not in doc:
-        raise DataError(path, "annotation", None if not isinstance(doc, dict) else sorted(doc),
-                        "an EMU bundle document holds 'annotation' and 'ssffFiles'")
+        raise DataError(
+            path,
+            "annotation",
+            None if not isinstance(doc, dict) else sorted(doc),
+            "an EMU bundle document holds 'annotation' and 'ssffFiles'",
+        )
     files = doc.get("ssffFiles", [])
     if not isinstance(files, list):
         raise DataError(path, "ssffFiles", type(files).__name__, "must be a list")
@@ -380,8 +416,9 @@ def read_bundle_json(path) -> tuple[dict, list[tuple[str, SsffFile]]]:
     for i, f in enumerate(files):
         where = f"ssffFiles[{i}]"
         if not isinstance(f, dict) or "data" not in f or "fileExtension" not in f:
-            raise DataError(path, where, f if not isinstance(f, dict) else sorted(f),
-                            "needs 'fileExtension', 'encoding' and 'data'")
+            raise DataError(
+                path, where, f if not isinstance(f, dict) else sorted(f), "needs 'fileExtension', 'encoding' and 'data'"
+            )
         if f.get("encoding", "BASE64") != "BASE64":
             raise DataError(path, f"{where}.encoding", f.get("encoding"), "only BASE64 is defined")
         try:
@@ -431,24 +468,39 @@ def _bundle_track(ssff_by_ext: dict, defs: list[dict] | None, wanted, source: st
         if f is None:
             raise DataError(source, f"SSFF file .{ext}", track_name, "missing from the bundle")
         if column not in f.columns:
-            raise DataError(source, f"SSFF file .{ext} column", column, "no such column",
-                            f"columns: {list(f.columns)}")
+            raise DataError(source, f"SSFF file .{ext} column", column, "no such column", f"columns: {list(f.columns)}")
         if ref is None:
             ref = (f, ext)
-        elif abs(f.record_freq - ref[0].record_freq) > 1e-9 * f.record_freq or f.n_records != ref[0].n_records \
-                or abs(f.start_time - ref[0].start_time) > 1e-9:
-            raise DataError(source, f"SSFF file .{ext}", f"{f.n_records} records at {f.record_freq:g}/s",
-                            f"tracks of one bundle must share rate, start and length (.{ref[1]}: "
-                            f"{ref[0].n_records} records at {ref[0].record_freq:g}/s)")
+        elif (
+            abs(f.record_freq - ref[0].record_freq) > 1e-9 * f.record_freq
+            or f.n_records != ref[0].n_records
+            or abs(f.start_time - ref[0].start_time) > 1e-9
+        ):
+            raise DataError(
+                source,
+                f"SSFF file .{ext}",
+                f"{f.n_records} records at {f.record_freq:g}/s",
+                f"tracks of one bundle must share rate, start and length (.{ref[1]}: "
+                f"{ref[0].n_records} records at {ref[0].record_freq:g}/s)",
+            )
         vals = f.columns[column].astype(float)
         blocks.append(vals)
         names += _track_channels(track_name, vals)
-    return Track(np.hstack(blocks), names, ref[0].record_freq, start_time=ref[0].start_time,
-                 source=f"{source} (.{ref[1]})")
+    return Track(
+        np.hstack(blocks), names, ref[0].record_freq, start_time=ref[0].start_time, source=f"{source} (.{ref[1]})"
+    )
 
 
-def load_emu_corpus(path, *, level: str | None = None, tracks=None, frame_rate: float | None = None,
-                    silence: str = SILENCE, tier: str | None = None, **_ignored):
+def load_emu_corpus(
+    path,
+    *,
+    level: str | None = None,
+    tracks=None,
+    frame_rate: float | None = None,
+    silence: str = SILENCE,
+    tier: str | None = None,
+    **_ignored,
+):
     """Read an emuDB folder, a folder of ``_bndl.json`` documents, or one such document.
 
     Parameters
@@ -496,7 +548,7 @@ def load_emu_corpus(path, *, level: str | None = None, tracks=None, frame_rate: 
             raise DataError(cpath, "sessions", 0, "no <session>_ses folder beside the DBconfig")
         for ses in sessions:
             for bndl in sorted(p for p in ses.iterdir() if p.is_dir() and p.name.endswith("_bndl")):
-                b = bndl.name[:-len("_bndl")]
+                b = bndl.name[: -len("_bndl")]
                 apath = bndl / f"{b}_annot.json"
                 if not apath.exists():
                     raise DataError(str(bndl), "annotation", apath.name, "missing from the bundle folder")
@@ -505,25 +557,30 @@ def load_emu_corpus(path, *, level: str | None = None, tracks=None, frame_rate: 
                     fp = bndl / f"{b}.{ext}"
                     if fp.exists():
                         ssff[ext] = read_ssff(fp)
-                alignment = annot_alignment(read_annot(apath), level=level, source=str(apath),
-                                            link_definitions=links, silence=silence)
+                alignment = annot_alignment(
+                    read_annot(apath), level=level, source=str(apath), link_definitions=links, silence=silence
+                )
                 track = _bundle_track(ssff, defs, tracks, str(bndl / b))
                 wav = bndl / f"{b}.{media}"
-                entries.append((f"{ses.name[:-len('_ses')]}_{b}", alignment, track,
-                                str(wav) if wav.exists() else None))
+                entries.append(
+                    (f"{ses.name[: -len('_ses')]}_{b}", alignment, track, str(wav) if wav.exists() else None)
+                )
     else:
         docs = [root] if root.is_file() else sorted(root.glob("*_bndl.json")) if root.is_dir() else []
         if not docs:
-            raise DataError(str(root), "path", str(root),
-                            "not an emuDB (no <name>_DBconfig.json) nor EMU bundle documents (<bundle>_bndl.json)")
+            raise DataError(
+                str(root),
+                "path",
+                str(root),
+                "not an emuDB (no <name>_DBconfig.json) nor EMU bundle documents (<bundle>_bndl.json)",
+            )
         name = root.stem if root.is_file() else root.name
         for doc in docs:
             annot, files = read_bundle_json(doc)
             alignment = annot_alignment(annot, level=level, source=f"{doc}:annotation", silence=silence)
             track = _bundle_track(dict(files), None, tracks, str(doc))
             entries.append((doc.name.removesuffix("_bndl.json"), alignment, track, None))
-    return build_corpus(entries, frame_rate=frame_rate, name=name, source=str(root),
-                        metadata={"format": "emu"})
+    return build_corpus(entries, frame_rate=frame_rate, name=name, source=str(root), metadata={"format": "emu"})
 
 
 def _level_for(level, tier, config: dict, source: str):

@@ -26,6 +26,7 @@ the layout written by the Edinburgh Speech Tools and Festival/Flite
 :func:`read_est_trajectory` is the reader that :mod:`dam.io` uses for
 ``.ema``, ``.est`` and ``.trk`` trajectories in a corpus directory.
 """
+
 from __future__ import annotations
 
 import os
@@ -63,6 +64,7 @@ class EstTrack:
     header : dict
         Every header field as text (``DataType``, ``NumFrames``, ...).
     """
+
     times: np.ndarray
     values: np.ndarray
     present: np.ndarray
@@ -80,8 +82,12 @@ class EstTrack:
 def _parse_header(raw: bytes, path: str) -> tuple[dict, list | None, int]:
     """Header fields, channel names and the byte offset where the data start."""
     if not raw.startswith(_MAGIC):
-        raise DataError(path, "header", raw[:20].decode("latin-1"),
-                        "not an EST track file (the first line must be 'EST_File Track')")
+        raise DataError(
+            path,
+            "header",
+            raw[:20].decode("latin-1"),
+            "not an EST track file (the first line must be 'EST_File Track')",
+        )
     end = raw.find(_END)
     if end < 0:
         raise DataError(path, "header", "EST_Header_End", "the header has no end line")
@@ -89,14 +95,14 @@ def _parse_header(raw: bytes, path: str) -> tuple[dict, list | None, int]:
     data_start = len(raw) if data_start < 0 else data_start + 1
     header: dict = {}
     names: dict[int, str] = {}
-    for line in decode_text(raw[len(_MAGIC):end], path, field="header").splitlines():
+    for line in decode_text(raw[len(_MAGIC) : end], path, field="header").splitlines():
         parts = line.split(None, 1)
         if not parts:
             continue
         key, value = parts[0], (parts[1].strip() if len(parts) > 1 else "")
         if key.startswith("Channel_"):
             try:
-                names[int(key[len("Channel_"):])] = value
+                names[int(key[len("Channel_") :])] = value
             except ValueError:
                 raise DataError(path, key, value, "channel names are written 'Channel_<number> <name>'") from None
         else:
@@ -116,8 +122,12 @@ def _parse_header(raw: bytes, path: str) -> tuple[dict, list | None, int]:
         missing = [i for i in range(n) if i not in names]
         if missing or max(names) >= n:
             bad = missing[0] if missing else max(names)
-            raise DataError(path, f"Channel_{bad}", names.get(bad),
-                            f"channel names must be Channel_0 .. Channel_{n - 1} (NumChannels {n})")
+            raise DataError(
+                path,
+                f"Channel_{bad}",
+                names.get(bad),
+                f"channel names must be Channel_0 .. Channel_{n - 1} (NumChannels {n})",
+            )
         channels = [names[i] for i in range(n)]
     return header, channels, data_start
 
@@ -154,8 +164,13 @@ def read_est(path) -> EstTrack:
             hint = None
             if len(body) == n_frames * n_channels * 4:
                 hint = "the size fits frames without the time and break columns, which EST always writes"
-            raise DataError(path, "data size", f"{len(body)} bytes",
-                            f"NumFrames {n_frames} x (NumChannels {n_channels} + 2) float32 need {expected}", hint)
+            raise DataError(
+                path,
+                "data size",
+                f"{len(body)} bytes",
+                f"NumFrames {n_frames} x (NumChannels {n_channels} + 2) float32 need {expected}",
+                hint,
+            )
         table = np.frombuffer(body, dtype=BYTE_ORDERS[order] + "f4").reshape(n_frames, width)
     elif dtype == "ascii":
         rows = [ln.split() for ln in decode_text(raw[start:], path, field="frames").splitlines() if ln.strip()]
@@ -163,8 +178,12 @@ def read_est(path) -> EstTrack:
             raise DataError(path, "frames", len(rows), f"the header says NumFrames {n_frames}")
         for i, r in enumerate(rows):
             if len(r) != width:
-                raise DataError(path, f"frame {i} (line {i + 1} after the header)", len(r),
-                                f"expected time, break flag and {n_channels} values = {width} columns")
+                raise DataError(
+                    path,
+                    f"frame {i} (line {i + 1} after the header)",
+                    len(r),
+                    f"expected time, break flag and {n_channels} values = {width} columns",
+                )
         try:
             table = np.array(rows, dtype=float).reshape(n_frames, width)
         except ValueError as exc:
@@ -172,12 +191,20 @@ def read_est(path) -> EstTrack:
     else:
         raise DataError(path, "DataType", dtype, "must be ascii or binary")
     table = table.astype(float)
-    return EstTrack(times=table[:, 0], values=table[:, 2:], present=table[:, 1] != 0,
-                    channels=channels, header=header)
+    return EstTrack(times=table[:, 0], values=table[:, 2:], present=table[:, 1] != 0, channels=channels, header=header)
 
 
-def write_est(path, values, *, times=None, frame_rate: float | None = None, channels=None,
-              binary: bool = True, byte_order: str | None = None, present=None) -> None:
+def write_est(
+    path,
+    values,
+    *,
+    times=None,
+    frame_rate: float | None = None,
+    channels=None,
+    binary: bool = True,
+    byte_order: str | None = None,
+    present=None,
+) -> None:
     """Write an EST track file.
 
     Parameters
@@ -229,8 +256,7 @@ def write_est(path, values, *, times=None, frame_rate: float | None = None, chan
     lines = ["EST_File Track", f"DataType {'binary' if binary else 'ascii'}"]
     if binary:
         lines.append(f"ByteOrder {byte_order}")
-    lines += [f"NumFrames {n}", f"NumChannels {m}", f"EqualSpace {int(equal)}",
-              "BreaksPresent true", "CommentChar ;"]
+    lines += [f"NumFrames {n}", f"NumChannels {m}", f"EqualSpace {int(equal)}", "BreaksPresent true", "CommentChar ;"]
     lines += [f"Channel_{i} {c}" for i, c in enumerate(channels or [])]
     lines.append("EST_Header_End")
     table = np.column_stack([times, flags, values])
@@ -240,8 +266,9 @@ def write_est(path, values, *, times=None, frame_rate: float | None = None, chan
             fh.write(table.astype(BYTE_ORDERS[byte_order] + "f4").tobytes())
         else:
             for row in table:
-                fh.write((f"{row[0]:.6f} {int(row[1])} " + " ".join(f"{v:.7g}" for v in row[2:]) + "\n")
-                         .encode("ascii"))
+                fh.write(
+                    (f"{row[0]:.6f} {int(row[1])} " + " ".join(f"{v:.7g}" for v in row[2:]) + "\n").encode("ascii")
+                )
 
 
 def read_est_trajectory(path) -> tuple[np.ndarray, list | None, float | None]:
@@ -259,9 +286,13 @@ def read_est_trajectory(path) -> tuple[np.ndarray, list | None, float | None]:
     gaps = np.flatnonzero(~track.present)
     if gaps.size:
         i = int(gaps[0])
-        raise DataError(path, f"frame {i} (t={track.times[i]:.4f} s)", "break",
-                        f"the track has a break (value flag 0) here; {gaps.size} break frame(s) in all",
-                        "interpolate across breaks before loading")
+        raise DataError(
+            path,
+            f"frame {i} (t={track.times[i]:.4f} s)",
+            "break",
+            f"the track has a break (value flag 0) here; {gaps.size} break frame(s) in all",
+            "interpolate across breaks before loading",
+        )
     fr = frame_rate_from_times(track.times, path, where="time (frame {})", first=0)
     return track.values, track.channels, None if fr is None else stored_frame_rate(track.times)
 

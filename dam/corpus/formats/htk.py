@@ -1,4 +1,5 @@
 """Label files: HTK ``.lab`` (times in 100 ns units) and ESPS/xwaves ``.lab`` (Festival, MOCHA-TIMIT, mngu0)."""
+
 from __future__ import annotations
 
 import os
@@ -32,28 +33,39 @@ def read_lab(path, *, silence: str = SILENCE) -> Alignment:
         if not parts or parts[0] == ".":  # '.' ends an HTK master-label entry
             continue
         if len(parts) < 2:
-            raise DataError(path, f"line {lineno}", line.strip(),
-                            "expected 'start end label' with times in 100 ns units",
-                            "this looks like a plain transcript, not a time-aligned label file")
+            raise DataError(
+                path,
+                f"line {lineno}",
+                line.strip(),
+                "expected 'start end label' with times in 100 ns units",
+                "this looks like a plain transcript, not a time-aligned label file",
+            )
         try:
             s, e = int(parts[0]), int(parts[1])
         except ValueError:
-            raise DataError(path, f"line {lineno} times", " ".join(parts[:2]),
-                            "HTK label times must be integers in 100 ns units",
-                            "for times in seconds use an ESPS/xwaves label file (header ending in '#') "
-                            "or a TextGrid") from None
+            raise DataError(
+                path,
+                f"line {lineno} times",
+                " ".join(parts[:2]),
+                "HTK label times must be integers in 100 ns units",
+                "for times in seconds use an ESPS/xwaves label file (header ending in '#') or a TextGrid",
+            ) from None
         try:
             starts.append(s / HTK_UNITS)
             ends.append(e / HTK_UNITS)
         except OverflowError:  # a 400-digit time: the Alignment's bound names the segment otherwise
-            raise DataError(path, f"line {lineno} times", " ".join(parts[:2])[:60],
-                            "time out of range (HTK times are in 100 ns units)") from None
+            raise DataError(
+                path,
+                f"line {lineno} times",
+                " ".join(parts[:2])[:60],
+                "time out of range (HTK times are in 100 ns units)",
+            ) from None
         labels.append(parts[2] if len(parts) > 2 else "")
     return Alignment(labels, starts, ends, source=path, silence=silence)
 
 
 def _read_xlabel(path: str, lines: list[str], silence: str) -> Alignment:
-    body = lines[next(i for i, line in enumerate(lines) if line.strip() == "#") + 1:]
+    body = lines[next(i for i, line in enumerate(lines) if line.strip() == "#") + 1 :]
     labels, ends = [], []
     for lineno, line in enumerate(body, len(lines) - len(body) + 1):
         parts = line.split(None, 2)

@@ -25,6 +25,7 @@ EST file marks as a *break* (value flag 0) is a dropout: here it becomes
 masked frames (:mod:`dam.corpus.formats.tracks`), where the generic
 directory reader refuses it.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -35,14 +36,24 @@ from dam.corpus.data import SILENCE, DataError
 from dam.corpus.formats.est import read_est, stored_frame_rate
 from dam.corpus.formats.tracks import Track, audio_beside, build_corpus, pair_by_stem, uniform_rate
 
-__all__ = ["MOCHA_CHANNELS", "MOCHA_SCALE", "read_ema_track", "load_mocha_corpus", "load_mngu0_corpus",
-           "looks_like_mocha"]
+__all__ = [
+    "MOCHA_CHANNELS",
+    "MOCHA_SCALE",
+    "read_ema_track",
+    "load_mocha_corpus",
+    "load_mngu0_corpus",
+    "looks_like_mocha",
+]
 
 _COILS_A = ("ui", "li", "ul", "ll", "tt")
 _COILS_B = ("tb", "td", "v", "coil10", "bn")
 #: the 20 channels of a MOCHA-TIMIT .ema file, in file order
-MOCHA_CHANNELS = tuple([f"{c}_x" for c in _COILS_A] + [f"{c}_y" for c in _COILS_A]
-                       + [f"{c}_x" for c in _COILS_B] + [f"{c}_y" for c in _COILS_B])
+MOCHA_CHANNELS = tuple(
+    [f"{c}_x" for c in _COILS_A]
+    + [f"{c}_y" for c in _COILS_A]
+    + [f"{c}_x" for c in _COILS_B]
+    + [f"{c}_y" for c in _COILS_B]
+)
 #: MOCHA-TIMIT EMA units per millimetre: values are stored in 1/100 mm
 MOCHA_SCALE = 0.01
 
@@ -71,8 +82,12 @@ def read_ema_track(path, *, scale: float = 1.0, default_channels=None) -> Track:
     if names is None:
         n = est.values.shape[1]
         if default_channels is not None and len(default_channels) != n:
-            raise DataError(path, "NumChannels", n, f"the {len(default_channels)}-channel layout does not fit "
-                                                    "and the header names no channels")
+            raise DataError(
+                path,
+                "NumChannels",
+                n,
+                f"the {len(default_channels)}-channel layout does not fit and the header names no channels",
+            )
         names = list(default_channels) if default_channels is not None else [f"c{i}" for i in range(n)]
     uniform_rate(est.times, path)  # refuses uneven frames, naming the first
     rate = stored_frame_rate(est.times)
@@ -80,12 +95,14 @@ def read_ema_track(path, *, scale: float = 1.0, default_channels=None) -> Track:
     start = float(est.times[0])
     if abs(start) <= 0.5 / rate:  # float32 times: a first frame within half a frame of 0 is at 0
         start = 0.0
-    return Track(est.values * scale, list(names), rate, start_time=start,
-                 mask=None if mask.all() else mask, source=path)
+    return Track(
+        est.values * scale, list(names), rate, start_time=start, mask=None if mask.all() else mask, source=path
+    )
 
 
-def _load_est_corpus(path, *, fmt: str, scale: float, default_channels, read_alignment, frame_rate,
-                     silence: str, tier, metadata: dict):
+def _load_est_corpus(
+    path, *, fmt: str, scale: float, default_channels, read_alignment, frame_rate, silence: str, tier, metadata: dict
+):
     root = Path(path)
     if not root.is_dir():
         raise DataError(str(root), "path", str(root), "not a directory")
@@ -94,12 +111,21 @@ def _load_est_corpus(path, *, fmt: str, scale: float, default_channels, read_ali
         track = read_ema_track(ema, scale=scale, default_channels=default_channels)
         alignment = read_alignment(lab, tier=tier, silence=silence)
         entries.append((stem, alignment, track, audio_beside(ema)))
-    return build_corpus(entries, frame_rate=frame_rate, name=root.name, source=str(root),
-                        metadata={"format": fmt, **metadata})
+    return build_corpus(
+        entries, frame_rate=frame_rate, name=root.name, source=str(root), metadata={"format": fmt, **metadata}
+    )
 
 
-def load_mocha_corpus(path, *, read_alignment, frame_rate: float | None = None, silence: str = SILENCE,
-                      tier: str | None = "phones", scale: float = MOCHA_SCALE, **_ignored):
+def load_mocha_corpus(
+    path,
+    *,
+    read_alignment,
+    frame_rate: float | None = None,
+    silence: str = SILENCE,
+    tier: str | None = "phones",
+    scale: float = MOCHA_SCALE,
+    **_ignored,
+):
     """Read a MOCHA-TIMIT speaker directory (``.ema`` + ``.lab`` [+ ``.wav``] per utterance).
 
     Parameters
@@ -120,19 +146,43 @@ def load_mocha_corpus(path, *, read_alignment, frame_rate: float | None = None, 
     Corpus
         Channels in mm; ``metadata`` has ``format: "mocha"`` and ``length_unit: "mm"``.
     """
-    return _load_est_corpus(path, fmt="mocha", scale=scale, default_channels=MOCHA_CHANNELS,
-                            read_alignment=read_alignment, frame_rate=frame_rate, silence=silence, tier=tier,
-                            metadata={"length_unit": "mm"})
+    return _load_est_corpus(
+        path,
+        fmt="mocha",
+        scale=scale,
+        default_channels=MOCHA_CHANNELS,
+        read_alignment=read_alignment,
+        frame_rate=frame_rate,
+        silence=silence,
+        tier=tier,
+        metadata={"length_unit": "mm"},
+    )
 
 
-def load_mngu0_corpus(path, *, read_alignment, frame_rate: float | None = None, silence: str = SILENCE,
-                      tier: str | None = "phones", **_ignored):
+def load_mngu0_corpus(
+    path,
+    *,
+    read_alignment,
+    frame_rate: float | None = None,
+    silence: str = SILENCE,
+    tier: str | None = "phones",
+    **_ignored,
+):
     """Read an mngu0 EMA directory (``.ema`` + ``.lab`` per utterance); values already in mm.
 
     Same parameters as :func:`load_mocha_corpus` (no scaling).
     """
-    return _load_est_corpus(path, fmt="mngu0", scale=1.0, default_channels=None, read_alignment=read_alignment,
-                            frame_rate=frame_rate, silence=silence, tier=tier, metadata={"length_unit": "mm"})
+    return _load_est_corpus(
+        path,
+        fmt="mngu0",
+        scale=1.0,
+        default_channels=None,
+        read_alignment=read_alignment,
+        frame_rate=frame_rate,
+        silence=silence,
+        tier=tier,
+        metadata={"length_unit": "mm"},
+    )
 
 
 def looks_like_mocha(ema_path) -> bool:

@@ -18,6 +18,7 @@ has the fields ``NAME``, ``SRATE``, ``SIGNAL``, ``SOURCE``, ``SENTENCE``,
 Files without a ``PHONES`` annotation (the ``*_palate.mat`` palate traces) are
 skipped. Read with :func:`scipy.io.loadmat`; numpy/scipy only.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -53,6 +54,7 @@ def _as_list(value) -> list:
 def _records(path: str) -> tuple[str, list[dict]]:
     from scipy.io import loadmat
     from scipy.io.matlab import MatReadError
+
     try:
         mat = loadmat(path, simplify_cells=True)
     except (MatReadError, ValueError, OSError, TypeError) as exc:
@@ -147,21 +149,29 @@ def _read(path: str, silence: str, sensors, *, skip_unannotated: bool):
         if rate is None:
             rate, n = srate, sig.shape[0]
         elif abs(srate - rate) > 1e-9 * rate or sig.shape[0] != n:
-            raise DataError(path, f"{where}", f"{sig.shape[0]} frames at {srate:g}/s",
-                            f"sensors of one file must share rate and length ({n} frames at {rate:g}/s)")
-        cols = MVIEW_COLUMNS[:sig.shape[1]] if sig.shape[1] in (3, 6) else [f"c{k + 1}" for k in range(sig.shape[1])]
+            raise DataError(
+                path,
+                f"{where}",
+                f"{sig.shape[0]} frames at {srate:g}/s",
+                f"sensors of one file must share rate and length ({n} frames at {rate:g}/s)",
+            )
+        cols = MVIEW_COLUMNS[: sig.shape[1]] if sig.shape[1] in (3, 6) else [f"c{k + 1}" for k in range(sig.shape[1])]
         names += [f"{name}_{c}" for c in cols]
         blocks.append(sig)
     track = Track(np.hstack(blocks), names, rate, source=path)
-    info = {"sentence": _text(audio.get("SENTENCE", "")) if audio else "",
-            "audio_rate": float(np.asarray(audio["SRATE"]).ravel()[0]) if audio else None,
-            "words": [(_text(w.get("LABEL", "")), *np.asarray(w.get("OFFS", [np.nan, np.nan]), float).ravel()[:2])
-                      for w in _as_list((audio or {}).get("WORDS")) if isinstance(w, dict)]}
+    info = {
+        "sentence": _text(audio.get("SENTENCE", "")) if audio else "",
+        "audio_rate": float(np.asarray(audio["SRATE"]).ravel()[0]) if audio else None,
+        "words": [
+            (_text(w.get("LABEL", "")), *np.asarray(w.get("OFFS", [np.nan, np.nan]), float).ravel()[:2])
+            for w in _as_list((audio or {}).get("WORDS"))
+            if isinstance(w, dict)
+        ],
+    }
     return alignment, track, info
 
 
-def load_mview_corpus(path, *, frame_rate: float | None = None, silence: str = SILENCE, sensors=None,
-                      **_ignored):
+def load_mview_corpus(path, *, frame_rate: float | None = None, silence: str = SILENCE, sensors=None, **_ignored):
     """Read a directory of Haskins/mview ``.mat`` files (one utterance each).
 
     Parameters
@@ -196,5 +206,10 @@ def load_mview_corpus(path, *, frame_rate: float | None = None, silence: str = S
         sentences[f.stem] = info["sentence"]
     if not entries:
         raise DataError(str(root), "PHONES", 0, "no .mat file in the directory has a PHONES annotation")
-    return build_corpus(entries, frame_rate=frame_rate, name=root.name, source=str(root),
-                        metadata={"format": "mview", "length_unit": "mm", "sentences": sentences})
+    return build_corpus(
+        entries,
+        frame_rate=frame_rate,
+        name=root.name,
+        source=str(root),
+        metadata={"format": "mview", "length_unit": "mm", "sentences": sentences},
+    )

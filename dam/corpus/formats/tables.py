@@ -1,4 +1,5 @@
 """Trajectory tables: CSV with a header row (and an optional leading ``time`` column) and ``.npy``."""
+
 from __future__ import annotations
 
 import io
@@ -46,12 +47,20 @@ def frame_rate_from_times(times, source, *, where: str = "time (frame {})", firs
     dt = float(np.median(step))
     if not dt > 0 or np.max(np.abs(step - dt)) > 0.01 * dt:
         k = int(np.argmax(np.abs(step - dt)))
-        raise DataError(source, where.format(k + 1 + first), float(t[k + 1]),
-                        f"the frame times are not evenly spaced (median step {dt:g} s)")
+        raise DataError(
+            source,
+            where.format(k + 1 + first),
+            float(t[k + 1]),
+            f"the frame times are not evenly spaced (median step {dt:g} s)",
+        )
     if abs(t[0]) > 0.5 * dt:
-        raise DataError(source, where.format(first), float(t[0]),
-                        "the first frame must be at time 0 (frame i is at i / frame_rate)",
-                        "pad the trajectory to start at 0 or shift the alignment")
+        raise DataError(
+            source,
+            where.format(first),
+            float(t[0]),
+            "the first frame must be at time 0 (frame i is at i / frame_rate)",
+            "pad the trajectory to start at 0 or shift the alignment",
+        )
     return 1.0 / dt
 
 
@@ -64,8 +73,13 @@ def read_npy(path: str) -> tuple[np.ndarray, list[str] | None, float | None]:
     except Exception as exc:
         raise DataError(path, "npy", type(exc).__name__, f"cannot be read: {exc}") from None
     if data.dtype.kind not in "biuf":
-        raise DataError(path, "dtype", str(data.dtype), "a trajectory must hold real numbers",
-                        "complex values have no meaning as articulator positions: store the part you mean")
+        raise DataError(
+            path,
+            "dtype",
+            str(data.dtype),
+            "a trajectory must hold real numbers",
+            "complex values have no meaning as articulator positions: store the part you mean",
+        )
     if data.ndim == 1:
         data = data[:, None]
     if data.ndim != 2:

@@ -1,4 +1,5 @@
 """Praat TextGrids (long and short text format), read and written through praatio."""
+
 from __future__ import annotations
 
 import os
@@ -23,6 +24,7 @@ def read_textgrid(path, *, tier: str | None = "phones", silence: str = SILENCE) 
     silence : str, default "sil"
     """
     from praatio import textgrid as ptg
+
     path = os.fspath(path)
     read_text(path)  # the encoding rule of dam.corpus.encoding, with the byte offset of a bad byte
     try:
@@ -36,8 +38,7 @@ def read_textgrid(path, *, tier: str | None = "phones", silence: str = SILENCE) 
     if tier in tg.tierNames and tier in interval_tiers:
         name = tier
     elif tier is not None and tier != "phones":
-        raise DataError(path, "tier", tier, "no interval tier of that name",
-                        f"interval tiers: {interval_tiers}")
+        raise DataError(path, "tier", tier, "no interval tier of that name", f"interval tiers: {interval_tiers}")
     elif interval_tiers:
         name = interval_tiers[0]
     else:
@@ -46,8 +47,7 @@ def read_textgrid(path, *, tier: str | None = "phones", silence: str = SILENCE) 
     if not entries:
         raise DataError(path, f"tier {name!r}", 0, "the tier has no intervals")
     labels = [e.label for e in entries]
-    return Alignment(labels, [e.start for e in entries], [e.end for e in entries],
-                     source=path, silence=silence)
+    return Alignment(labels, [e.start for e in entries], [e.end for e in entries], source=path, silence=silence)
 
 
 def _snapped_textgrid(path):
@@ -61,6 +61,7 @@ def _snapped_textgrid(path):
     from praatio.utilities import textgrid_io
 
     from dam.corpus.data import TIME_TOL
+
     try:
         parsed = textgrid_io.parseTextgridStr(read_text(path), includeEmptyIntervals=True)
         tg = ptg.Textgrid()
@@ -74,10 +75,14 @@ def _snapped_textgrid(path):
                 if prev_end - TIME_TOL <= start < prev_end:
                     entries[i] = (prev_end,) + entries[i][1:]
                 elif start < prev_end:
-                    raise DataError(path, f"tier {t['name']!r} interval {i + 1} xmin", start,
-                                    f"overlaps the previous interval {entries[i - 1][2]!r} (which ends at "
-                                    f"{prev_end:g}) by {prev_end - start:.3g} s",
-                                    "overlaps below 1 microsecond are snapped; longer ones are errors")
+                    raise DataError(
+                        path,
+                        f"tier {t['name']!r} interval {i + 1} xmin",
+                        start,
+                        f"overlaps the previous interval {entries[i - 1][2]!r} (which ends at "
+                        f"{prev_end:g}) by {prev_end - start:.3g} s",
+                        "overlaps below 1 microsecond are snapped; longer ones are errors",
+                    )
             tg.addTier(ptg.IntervalTier(t["name"], entries, float(t["xmin"]), float(t["xmax"])))
         return tg
     except DataError:
@@ -86,10 +91,10 @@ def _snapped_textgrid(path):
         return None
 
 
-def write_textgrid(alignment: Alignment, path, *, tier: str = "phones",
-                   format: str = "long_textgrid") -> None:
+def write_textgrid(alignment: Alignment, path, *, tier: str = "phones", format: str = "long_textgrid") -> None:
     """Write ``alignment`` as a one-tier Praat TextGrid (silence keeps its canonical label)."""
     from praatio import textgrid as ptg
+
     entries = list(zip(alignment.starts.tolist(), alignment.ends.tolist(), alignment.labels))
     tg = ptg.Textgrid()
     tg.addTier(ptg.IntervalTier(tier, entries, 0.0, alignment.duration))

@@ -24,6 +24,7 @@ grid (frame ``i`` at ``i / frame_rate``):
   trimmed to it when only silence, or at most one frame of a phone, is cut;
   cutting more of a phone is an error naming the file.
 """
+
 from __future__ import annotations
 
 import math
@@ -91,9 +92,13 @@ def uniform_rate(times, source, *, where: str = "time (frame {})") -> float:
     bad = np.flatnonzero(~(np.abs(step - dt) <= _RATE_TOL * dt))
     if not dt > 0 or bad.size:
         k = int(bad[0]) + 1 if bad.size else 1
-        raise DataError(source, where.format(k), float(t[k]),
-                        f"the frame times are not evenly spaced (median step {dt:g} s)",
-                        "pass frame_rate= to resample the track onto an even grid")
+        raise DataError(
+            source,
+            where.format(k),
+            float(t[k]),
+            f"the frame times are not evenly spaced (median step {dt:g} s)",
+            "pass frame_rate= to resample the track onto an even grid",
+        )
     return (len(t) - 1) / float(t[-1] - t[0])
 
 
@@ -141,20 +146,33 @@ def fit_to_track(alignment: Alignment, duration: float, source: str | None, *, f
     if alignment.duration <= duration + 1e-9:
         return alignment
     keep = int(np.searchsorted(alignment.starts, duration - 1e-9, side="left"))
-    cut = [(lab, float(min(e, alignment.duration) - max(s, duration)))
-           for lab, s, e in zip(alignment.labels[keep - 1:], alignment.starts[keep - 1:], alignment.ends[keep - 1:])]
+    cut = [
+        (lab, float(min(e, alignment.duration) - max(s, duration)))
+        for lab, s, e in zip(alignment.labels[keep - 1 :], alignment.starts[keep - 1 :], alignment.ends[keep - 1 :])
+    ]
     phones = [lab for lab, amount in cut if lab != alignment.silence and amount > frame + 1e-9]
     if keep == 0 or phones:
-        raise DataError(source, "duration", f"{duration:.4f} s",
-                        f"the trajectory ends before the labels ({alignment.duration:.4f} s); "
-                        f"trimming the labels would cut into {phones or list(alignment.labels)!r}")
+        raise DataError(
+            source,
+            "duration",
+            f"{duration:.4f} s",
+            f"the trajectory ends before the labels ({alignment.duration:.4f} s); "
+            f"trimming the labels would cut into {phones or list(alignment.labels)!r}",
+        )
     ends = np.minimum(alignment.ends[:keep], duration)
-    return Alignment(alignment.labels[:keep], alignment.starts[:keep], ends, source=alignment.source,
-                     silence=alignment.silence)
+    return Alignment(
+        alignment.labels[:keep], alignment.starts[:keep], ends, source=alignment.source, silence=alignment.silence
+    )
 
 
-def build_corpus(entries: Iterable[tuple], *, frame_rate: float | None = None, name: str | None = None,
-                 metadata: dict | None = None, source: str | None = None) -> Corpus:
+def build_corpus(
+    entries: Iterable[tuple],
+    *,
+    frame_rate: float | None = None,
+    name: str | None = None,
+    metadata: dict | None = None,
+    source: str | None = None,
+) -> Corpus:
     """Utterances on one frame grid from ``(name, alignment, track, audio)`` entries.
 
     Parameters
@@ -185,15 +203,22 @@ def build_corpus(entries: Iterable[tuple], *, frame_rate: float | None = None, n
         first = entries[0][2]
         for _, _, track, _ in entries[1:]:
             if abs(track.frame_rate - first.frame_rate) > 1e-6 * first.frame_rate:
-                raise DataError(track.source, "frame_rate", f"{track.frame_rate:g} frames/s",
-                                f"differs from the {first.frame_rate:g} frames/s of {first.source}",
-                                "pass frame_rate= (load_corpus(..., frame_rate=R)) to resample every "
-                                "track to one rate by linear interpolation")
+                raise DataError(
+                    track.source,
+                    "frame_rate",
+                    f"{track.frame_rate:g} frames/s",
+                    f"differs from the {first.frame_rate:g} frames/s of {first.source}",
+                    "pass frame_rate= (load_corpus(..., frame_rate=R)) to resample every "
+                    "track to one rate by linear interpolation",
+                )
     utts = []
     for utt_name, alignment, track, audio in entries:
         rate = frame_rate if frame_rate is not None else track.frame_rate
-        on_grid = (frame_rate is None or abs(rate - track.frame_rate) <= 1e-9 * rate) \
-            and track.times is None and abs(track.start_time) <= 1e-9
+        on_grid = (
+            (frame_rate is None or abs(rate - track.frame_rate) <= 1e-9 * rate)
+            and track.times is None
+            and abs(track.start_time) <= 1e-9
+        )
         if on_grid:
             values = np.array(track.values, dtype=float)
             observed = track.observed()
@@ -202,13 +227,24 @@ def build_corpus(entries: Iterable[tuple], *, frame_rate: float | None = None, n
         n = len(values)
         alignment = fit_to_track(alignment, n / rate, track.source, frame=1.0 / rate)
         mask = None if observed.all() else observed
-        utts.append(Utterance(alignment, np.where(observed, values, 0.0), rate, track.channels,
-                              mask=mask, audio=audio, name=utt_name, source=track.source))
+        utts.append(
+            Utterance(
+                alignment,
+                np.where(observed, values, 0.0),
+                rate,
+                track.channels,
+                mask=mask,
+                audio=audio,
+                name=utt_name,
+                source=track.source,
+            )
+        )
     return Corpus(utts, name=name, metadata=metadata, source=source)
 
 
-def pair_by_stem(root: Path, trajectory_suffixes: Sequence[str], alignment_suffixes: Sequence[str],
-                 *, what: str) -> list[tuple[str, Path, Path]]:
+def pair_by_stem(
+    root: Path, trajectory_suffixes: Sequence[str], alignment_suffixes: Sequence[str], *, what: str
+) -> list[tuple[str, Path, Path]]:
     """``(stem, trajectory, alignment)`` for every trajectory file in ``root`` with its alignment.
 
     Alignments are looked for with the same stem, in the order of
@@ -224,8 +260,12 @@ def pair_by_stem(root: Path, trajectory_suffixes: Sequence[str], alignment_suffi
             continue
         found = [by_stem[p.stem][s] for s in alignment_suffixes if s in by_stem[p.stem]]
         if not found:
-            raise DataError(str(p), "alignment", p.stem,
-                            f"no label file {p.stem}{{{','.join(alignment_suffixes)}}} beside this {what} file")
+            raise DataError(
+                str(p),
+                "alignment",
+                p.stem,
+                f"no label file {p.stem}{{{','.join(alignment_suffixes)}}} beside this {what} file",
+            )
         out.append((p.stem, p, found[0]))
     if not out:
         raise DataError(str(root), "files", 0, f"no {what} files ({', '.join(trajectory_suffixes)}) in the directory")

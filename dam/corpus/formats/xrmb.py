@@ -21,6 +21,7 @@ Labels come beside each ``.txy`` file with the same stem: a TextGrid, an HTK
 or xwaves ``.lab`` file, or a BAS ``.par`` file (the database's own word
 segmentations are not phones). :func:`write_txy` writes the format back.
 """
+
 from __future__ import annotations
 
 import os
@@ -68,8 +69,9 @@ def read_txy(path) -> Track:
             if not parts:
                 continue
             if len(parts) not in (16, 17) or (rows and len(parts) != len(rows[0][1])):
-                raise DataError(path, f"line {lineno}", len(parts),
-                                "expected 17 numbers (time, then x y of 8 pellets) per line")
+                raise DataError(
+                    path, f"line {lineno}", len(parts), "expected 17 numbers (time, then x y of 8 pellets) per line"
+                )
             try:
                 rows.append((lineno, [int(v) for v in parts]))
             except ValueError:
@@ -92,8 +94,7 @@ def read_txy(path) -> Track:
     # one rate for the whole corpus; frames off that grid are resampled onto it.
     rate = 1e6 / float(np.median(np.diff(times_us)))
     even = bool(np.allclose(times, times[0] + np.arange(len(times)) / rate, atol=0.05 / rate))
-    return Track(values, list(_CHANNELS), rate, start_time=float(times[0]), source=path,
-                 times=None if even else times)
+    return Track(values, list(_CHANNELS), rate, start_time=float(times[0]), source=path, times=None if even else times)
 
 
 def write_txy(path, values, *, times=None, mask=None, frame_us: int = XRMB_FRAME_US) -> None:
@@ -129,8 +130,15 @@ def write_txy(path, values, *, times=None, mask=None, frame_us: int = XRMB_FRAME
         fh.write(("\n".join(lines) + "\n").encode("ascii"))
 
 
-def load_xrmb_corpus(path, *, read_alignment, frame_rate: float | None = None, silence: str = SILENCE,
-                     tier: str | None = "phones", **_ignored):
+def load_xrmb_corpus(
+    path,
+    *,
+    read_alignment,
+    frame_rate: float | None = None,
+    silence: str = SILENCE,
+    tier: str | None = "phones",
+    **_ignored,
+):
     """Read a directory of ``.txy`` files with their labels (see the module docstring).
 
     Parameters
@@ -156,5 +164,10 @@ def load_xrmb_corpus(path, *, read_alignment, frame_rate: float | None = None, s
     for stem, txy, lab in pair_by_stem(root, (".txy", ".xyd"), (".textgrid", ".lab", ".par"), what="pellet"):
         track = read_txy(txy)
         entries.append((stem, read_alignment(lab, tier=tier, silence=silence), track, audio_beside(txy)))
-    return build_corpus(entries, frame_rate=frame_rate, name=root.name, source=str(root),
-                        metadata={"format": "xrmb", "length_unit": "mm"})
+    return build_corpus(
+        entries,
+        frame_rate=frame_rate,
+        name=root.name,
+        source=str(root),
+        metadata={"format": "xrmb", "length_unit": "mm"},
+    )

@@ -14,6 +14,7 @@ The runtime repeats, on purpose, the few formulas of synthesis (Eq. 1, Eq. 2,
 embeds one file, so it cannot import them. The tests hold the two to each
 other on the bundled models.
 """
+
 from __future__ import annotations
 
 import json
@@ -46,39 +47,58 @@ def copy_runtime(directory) -> str:
 
 
 #: What the runtime plays: registry name -> learned attributes it reads (besides the DAM's).
-_TABLES = {"phone-mean": ("table_",),
-           "cohen-massaro": ("target_", "alpha_", "theta_left_", "theta_right_", "c_")}
+_TABLES = {"phone-mean": ("table_",), "cohen-massaro": ("target_", "alpha_", "theta_left_", "theta_right_", "c_")}
 
 
 def _tables(model):
     """The runtime file's JSON header and arrays for a fitted model."""
     from dam.model import DAM
+
     name = getattr(model, "name", type(model).__name__)
     if not isinstance(model, DAM) and name not in _TABLES:
-        raise DataError(None, "model", name, "the tiny runtime plays dam, dam-m0, cohen-massaro and phone-mean; "
-                        "other models save with model.save()")
+        raise DataError(
+            None,
+            "model",
+            name,
+            "the tiny runtime plays dam, dam-m0, cohen-massaro and phone-mean; other models save with model.save()",
+        )
     model._check_fitted()
-    meta = {"format": RUNTIME_FORMAT, "version": RUNTIME_VERSION, "model": "dam" if isinstance(model, DAM) else name,
-            "toolkit": _toolkit(), "frame_rate": float(model.frame_rate_), "channels": list(model.channels_)}
+    meta = {
+        "format": RUNTIME_FORMAT,
+        "version": RUNTIME_VERSION,
+        "model": "dam" if isinstance(model, DAM) else name,
+        "toolkit": _toolkit(),
+        "frame_rate": float(model.frame_rate_),
+        "channels": list(model.channels_),
+    }
     if not isinstance(model, DAM):
         # baselines are read by their attributes: dam never imports baselines
         meta["phones"] = list(model.phone_counts_)
         if name == "cohen-massaro":
             import importlib
+
             cm = importlib.import_module(type(model).__module__)
             meta.update(block_frames=int(cm.BLOCK_FRAMES), neighbours=int(cm.NEIGHBOURS))
         return meta, {k.rstrip("_"): np.asarray(getattr(model, k), dtype=float) for k in _TABLES[name]}
     from dam.model.animeme import boundary_derivatives, legendre_to_monomial
+
     phones = list(model.phone_modes_)
-    meta.update({
-        "phones": phones,
-        "first": [int(model.phone_modes_[p][0]) for p in phones],
-        "count": [int(model.phone_modes_[p][1]) for p in phones],
-        "normalize": bool(model.normalize), "extrapolate": str(model.extrapolate), "eps": float(model.eps),
-        "tol": float(model.dominance_tol), "w_c": float(model.w_c), "w_s": float(model.w_s),
-        "context_smoothing": float(model.context_smoothing), "time_scale": float(model.time_scale_),
-        "context": model.context_counts_,
-    })
+    meta.update(
+        {
+            "phones": phones,
+            "first": [int(model.phone_modes_[p][0]) for p in phones],
+            "count": [int(model.phone_modes_[p][1]) for p in phones],
+            "normalize": bool(model.normalize),
+            "extrapolate": str(model.extrapolate),
+            "eps": float(model.eps),
+            "tol": float(model.dominance_tol),
+            "w_c": float(model.w_c),
+            "w_s": float(model.w_s),
+            "context_smoothing": float(model.context_smoothing),
+            "time_scale": float(model.time_scale_),
+            "context": model.context_counts_,
+        }
+    )
     arrays = {
         # the same monomial coefficients the toolkit evaluates by Horner's rule
         "power": np.ascontiguousarray(legendre_to_monomial(model.coef_.transpose(1, 0, 2)).transpose(1, 0, 2)),

@@ -26,6 +26,7 @@ Example::
 
 Phones the model never saw raise ``KeyError`` (map them before calling).
 """
+
 import json
 import math
 
@@ -75,9 +76,9 @@ class Model:
         if self.kind in ("dam", "dam-m0"):
             self._first = np.asarray(meta["first"], dtype=np.int64)
             self._count = np.asarray(meta["count"], dtype=np.int64)
-            self.power = arrays["power"]          # (n_modes, degree + 1, C) monomial coefficients a^0 .. a^M
-            self.sigma = arrays["sigma"]          # (n_modes, C)
-            self.edges = arrays["edges"]          # (n_modes, 2, 3, C): A, A', A'' at t = 0 and t = 1
+            self.power = arrays["power"]  # (n_modes, degree + 1, C) monomial coefficients a^0 .. a^M
+            self.sigma = arrays["sigma"]  # (n_modes, C)
+            self.edges = arrays["edges"]  # (n_modes, 2, 3, C): A, A', A'' at t = 0 and t = 1
             self.scale = arrays["channel_scale"]  # (C,)
             self._context = meta["context"]
             self._nll = {}
@@ -94,14 +95,14 @@ class Model:
 
         def add(lab, s, e):
             if lab == self.silence and L and L[-1] == self.silence:
-                E[-1] = e                        # adjacent silences are one pause, as in the toolkit
+                E[-1] = e  # adjacent silences are one pause, as in the toolkit
             else:
                 L.append(lab), S.append(max(s, 0.0)), E.append(e)
 
         prev = 0.0
         for lab, s, e in zip(labels, starts, ends):
             s = float(s)
-            if s > prev + 1e-6:                  # a gap is silence, as in the toolkit
+            if s > prev + 1e-6:  # a gap is silence, as in the toolkit
                 add(self.silence, prev, s)
             elif abs(s - prev) <= 1e-6:
                 s = prev
@@ -119,15 +120,20 @@ class Model:
         key = (phone, left, right)
         if key not in self._nll:
             self._nll[key] = float(self.meta["w_c"]) * _mode_nll(
-                self._context, phone, left, right, int(self._count[self._index[phone]]),
-                float(self.meta["context_smoothing"]))
+                self._context,
+                phone,
+                left,
+                right,
+                int(self._count[self._index[phone]]),
+                float(self.meta["context_smoothing"]),
+            )
         return self._nll[key]
 
     def _edge(self, g_prev, g_cur, d_prev, d_cur):
         tau = float(self.meta["time_scale"])
         k = np.arange(3)[:, None]
-        p = self.edges[g_prev, 1] * (tau / d_prev) ** k / self.scale     # (G_prev, 3, C)
-        c = self.edges[g_cur, 0] * (tau / d_cur) ** k / self.scale      # (G_cur, 3, C)
+        p = self.edges[g_prev, 1] * (tau / d_prev) ** k / self.scale  # (G_prev, 3, C)
+        c = self.edges[g_cur, 0] * (tau / d_cur) ** k / self.scale  # (G_cur, 3, C)
         return float(self.meta["w_s"]) * ((p[:, None] - c[None, :]) ** 2).sum(axis=(-2, -1))
 
     def modes(self, labels, ends, starts=None):
@@ -145,7 +151,7 @@ class Model:
         zero = np.zeros(1)
         acc, back = (self._node(L[0], pad[0], pad[2]) if count[0] > 1 else zero), []
         for j in range(1, len(L)):
-            if count[j] == 1 and count[j - 1] == 1:      # nothing to choose: every path passes here
+            if count[j] == 1 and count[j - 1] == 1:  # nothing to choose: every path passes here
                 acc = zero
                 back.append(np.zeros(1, dtype=np.int64))
                 continue
@@ -172,7 +178,7 @@ class Model:
         cheapest path.
         """
         L, S, E = self._segments(labels, starts, ends)
-        n = int(math.floor(E[-1] * self.frame_rate + 1e-6 * self.frame_rate)) + 1   # frames at t <= end
+        n = int(math.floor(E[-1] * self.frame_rate + 1e-6 * self.frame_rate)) + 1  # frames at t <= end
         if self.kind == "phone-mean":
             idx = np.minimum(np.searchsorted(E, np.arange(n) / self.frame_rate + 1e-9, side="right"), len(L) - 1)
             return self.arrays["table"][np.array([self._index[p] for p in L])[idx]]
@@ -185,12 +191,12 @@ class Model:
         """Cohen & Massaro (1993): ``sum_s D_s T_s / sum_s D_s``, ``D = alpha exp(-theta |tau|^c)``."""
         a = self.arrays
         rows = np.array([self._index[p] for p in L])
-        first = np.r_[True, rows[1:] != rows[:-1]]     # neighbouring segments of one phone act as one
+        first = np.r_[True, rows[1:] != rows[:-1]]  # neighbouring segments of one phone act as one
         last = np.r_[first[1:], True]
         s, e, rows = S[first], E[last], rows[first]
         block, near = int(self.meta["block_frames"]), int(self.meta["neighbours"])
         parts = []
-        for b in range(0, n_frames, block):             # blocks of frames, each with the segments near it
+        for b in range(0, n_frames, block):  # blocks of frames, each with the segments near it
             t = np.arange(b, min(b + block, n_frames)) / self.frame_rate
             lo = max(int(np.searchsorted(e, t[0], side="left")) - near, 0)
             hi = int(np.searchsorted(s, t[-1], side="right")) + near
@@ -225,11 +231,11 @@ class Model:
         power = np.ascontiguousarray(self.power[glob].transpose(1, 0, 2))
         ta = (t if self.meta["extrapolate"] == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0))[:, None]
         A = power[-1].take(seg, axis=0)
-        for m in range(power.shape[0] - 2, -1, -1):                     # Horner's rule
+        for m in range(power.shape[0] - 2, -1, -1):  # Horner's rule
             A *= ta
             A += power[m].take(seg, axis=0)
         u = np.maximum(-t, 0.0) + np.maximum(t - 1.0, 0.0)
-        D = np.exp(-(u * u)[:, None] / (sigma * sigma + eps).take(seg, axis=0))   # Eq. (1)
+        D = np.exp(-(u * u)[:, None] / (sigma * sigma + eps).take(seg, axis=0))  # Eq. (1)
         if tol > 0.0:
             D[D < tol] = 0.0
         A *= D

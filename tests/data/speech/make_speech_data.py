@@ -14,6 +14,7 @@ run reads only the files this writes:
 The sentences are Harvard sentences (IEEE 1969, public domain) and one made up;
 the audio is espeak-ng's output, which its GPL does not cover.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -42,9 +43,16 @@ class _Id(ctypes.Union):
 
 
 class _Event(ctypes.Structure):
-    _fields_ = [("type", ctypes.c_int), ("unique_identifier", ctypes.c_uint), ("text_position", ctypes.c_int),
-                ("length", ctypes.c_int), ("audio_position", ctypes.c_int), ("sample", ctypes.c_int),
-                ("user_data", ctypes.c_void_p), ("id", _Id)]
+    _fields_ = [
+        ("type", ctypes.c_int),
+        ("unique_identifier", ctypes.c_uint),
+        ("text_position", ctypes.c_int),
+        ("length", ctypes.c_int),
+        ("audio_position", ctypes.c_int),
+        ("sample", ctypes.c_int),
+        ("user_data", ctypes.c_void_p),
+        ("id", _Id),
+    ]
 
 
 _CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(ctypes.c_short), ctypes.c_int, ctypes.POINTER(_Event))
@@ -63,8 +71,9 @@ def speak(text: str, voice: str, wpm: int):
         while ev[i].type != 0:
             e = ev[i]
             name = bytes(e.id.string).split(b"\0")[0].decode("utf-8") if e.type == _PHONEME else None
-            events.append({"type": e.type, "text_position": e.text_position, "length": e.length,
-                           "sample": e.sample, "name": name})
+            events.append(
+                {"type": e.type, "text_position": e.text_position, "length": e.length, "sample": e.sample, "name": name}
+            )
             i += 1
         return 0
 
@@ -88,15 +97,14 @@ def truth(text: str, events, rate: int) -> dict:
         if not e["name"]:
             continue  # a pause marker: the previous phone ends here
         end = marks[k + 1]["sample"]
-        phones.append({"ipa": e["name"], "start": e["sample"] / rate, "end": end / rate,
-                       "word": e["text_position"]})
+        phones.append({"ipa": e["name"], "start": e["sample"] / rate, "end": end / rate, "word": e["text_position"]})
     # espeak-ng joins unstressed function words to their neighbour ("on the" is
     # one word event), so a truth "word" is the text from one word event to the next
     positions = sorted(word_starts)
     for k, pos in enumerate(positions):
         mine = [p for p in phones if p["word"] == pos]
         stop = positions[k + 1] - 1 if k + 1 < len(positions) else len(text)
-        group = " ".join(w.strip(".,;:!?").lower() for w in text[pos - 1:stop].split())
+        group = " ".join(w.strip(".,;:!?").lower() for w in text[pos - 1 : stop].split())
         words.append({"words": group, "start": mine[0]["start"], "end": mine[-1]["end"]})
     return {"phones": phones, "words": words}
 
@@ -116,9 +124,17 @@ def main():
             x = np.stack([x, 0.6 * x], axis=1)
         path = HERE / f"{name}.{ext}"
         sf.write(path, x, out_rate, subtype=subtype)
-        meta = {"text": text, "audio": path.name, "voice": voice, "words_per_minute": wpm,
-                "sample_rate": out_rate, "subtype": subtype, "channels": channels,
-                "generator": "espeak-ng 1.51 (Debian) phoneme events, make_speech_data.py", **t}
+        meta = {
+            "text": text,
+            "audio": path.name,
+            "voice": voice,
+            "words_per_minute": wpm,
+            "sample_rate": out_rate,
+            "subtype": subtype,
+            "channels": channels,
+            "generator": "espeak-ng 1.51 (Debian) phoneme events, make_speech_data.py",
+            **t,
+        }
         (HERE / f"{name}.json").write_text(json.dumps(meta, indent=1, ensure_ascii=False) + "\n")
         print(name, path.stat().st_size, "bytes", len(t["phones"]), "phones")
 

@@ -72,8 +72,22 @@ def play(tmp_path, models: dict, alignments):
     }
     (work / "jobs.json").write_text(json.dumps(jobs))
     (work / "player.py").write_text(PLAYER)
+    # numpy alone on the path: links to its package (and its bundled libraries), not to the
+    # site-packages folder where an installed dam also lives
+    numpy_only = tmp_path / "numpy-only"
+    numpy_only.mkdir()
+    for name in os.listdir(NUMPY_HOME):
+        if name == "numpy" or name.startswith("numpy.libs") or name.startswith("numpy-"):
+            os.symlink(os.path.join(NUMPY_HOME, name), numpy_only / name)
     proc = subprocess.run(
-        [sys.executable, "-S", str(work / "player.py"), NUMPY_HOME, str(work / "jobs.json"), str(work / "out.npz")],
+        [
+            sys.executable,
+            "-S",
+            str(work / "player.py"),
+            str(numpy_only),
+            str(work / "jobs.json"),
+            str(work / "out.npz"),
+        ],
         cwd=work,
         capture_output=True,
         text=True,

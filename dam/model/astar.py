@@ -311,9 +311,8 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
         act = np.flatnonzero(L > k)
         j = first[act] + k
         tot = acc[act][:, :, None] + edges[j - 1]  # (n_act, G_prev, G)
-        arg = tot.argmin(axis=1)
-        back.append((act, arg))
-        acc[act] = np.take_along_axis(tot, arg[:, None, :], axis=1)[:, 0, :] + nodes[j]
+        back.append((act, tot.argmin(axis=1)))
+        acc[act] = tot.min(axis=1) + nodes[j]  # the value at the argmin, without gathering it
     after = last + 1 < J
     acc[after] += edges[last[after], :, path[last[after] + 1]]
     path[last] = acc.argmin(axis=1)

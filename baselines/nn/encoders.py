@@ -350,23 +350,25 @@ class MFCCEncoder(AudioEncoder):
         o["fmax"] = o["fmax"] or None
         return o
 
-    def _compute(self, samples, frame_rate, n_frames):
-        from .acoustic import mfcc
-
+    def _analysis(self, frame_rate, n_frames) -> dict:
+        """The keywords every function of :mod:`baselines.nn.acoustic` shares, from the options."""
         o = self._settings()
-        return mfcc(
-            samples,
-            self.sample_rate,
+        return dict(
             frame_rate=frame_rate,
             n_frames=n_frames,
-            n_mfcc=int(o["n_mfcc"]),
             n_mels=int(o["n_mels"]),
             window=o["window"],
             hop=o["hop"],
             fmin=o["fmin"],
             fmax=o["fmax"],
             preemphasis=o["preemphasis"],
-        ).astype(np.float32)
+        )
+
+    def _compute(self, samples, frame_rate, n_frames):
+        from .acoustic import mfcc
+
+        kw = self._analysis(frame_rate, n_frames)
+        return mfcc(samples, self.sample_rate, n_mfcc=int(self.options["n_mfcc"]), **kw).astype(np.float32)
 
 
 class FbankEncoder(MFCCEncoder):
@@ -381,19 +383,7 @@ class FbankEncoder(MFCCEncoder):
     def _compute(self, samples, frame_rate, n_frames):
         from .acoustic import log_mel
 
-        o = self._settings()
-        return log_mel(
-            samples,
-            self.sample_rate,
-            frame_rate=frame_rate,
-            n_frames=n_frames,
-            n_mels=int(o["n_mels"]),
-            window=o["window"],
-            hop=o["hop"],
-            fmin=o["fmin"],
-            fmax=o["fmax"],
-            preemphasis=o["preemphasis"],
-        ).astype(np.float32)
+        return log_mel(samples, self.sample_rate, **self._analysis(frame_rate, n_frames)).astype(np.float32)
 
 
 class ZhouEncoder(MFCCEncoder):
@@ -410,19 +400,9 @@ class ZhouEncoder(MFCCEncoder):
     def _compute(self, samples, frame_rate, n_frames):
         from .acoustic import log_mel, mfcc, subband_centroids
 
-        o = self._settings()
-        kw = dict(
-            frame_rate=frame_rate,
-            n_frames=n_frames,
-            n_mels=int(o["n_mels"]),
-            window=o["window"],
-            hop=o["hop"],
-            fmin=o["fmin"],
-            fmax=o["fmax"],
-            preemphasis=o["preemphasis"],
-        )
+        kw = self._analysis(frame_rate, n_frames)
         parts = [
-            mfcc(samples, self.sample_rate, n_mfcc=int(o["n_mfcc"]), **kw),
+            mfcc(samples, self.sample_rate, n_mfcc=int(self.options["n_mfcc"]), **kw),
             log_mel(samples, self.sample_rate, **kw),
             subband_centroids(samples, self.sample_rate, **kw),
         ]

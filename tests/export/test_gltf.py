@@ -17,30 +17,11 @@ import numpy as np
 import pytest
 
 from dam.corpus import DataError
+from dam.datasets.vtl import VTL_CHANNELS
 from dam.export import export
 from dam.export.gltf import fit_weights
 
-VTL = (
-    "HX",
-    "HY",
-    "JX",
-    "JA",
-    "LP",
-    "LD",
-    "VS",
-    "VO",
-    "TCX",
-    "TCY",
-    "TTX",
-    "TTY",
-    "TBX",
-    "TBY",
-    "TRX",
-    "TRY",
-    "TS1",
-    "TS2",
-    "TS3",
-)
+VTL = VTL_CHANNELS
 
 
 def assert_valid(validate, paths):

@@ -60,6 +60,9 @@ __all__ = [
 # is negligible (and a phrase-length utterance is one block with all its segments).
 BLOCK_FRAMES = 1000
 NEIGHBOURS = 30
+# Channels are evaluated together, as many as keep a (channels x frames x segments) work
+# array under this many numbers (a few cache-sized megabytes).
+WORK_SIZE = 1 << 17
 # Parameter blocks of one channel, each of length n_phones, in this order.
 BLOCKS = ("target", "log_alpha", "log_theta_left", "log_theta_right", "log_c")
 
@@ -85,13 +88,14 @@ def dominance(tau, alpha, theta_left, theta_right, c):
 class _Design:
     """What the fit needs from one utterance: segment phones and centre-to-frame times.
 
-    ``tau`` has shape (n_frames, n_segments) (every ``stride``-th frame
-    from ``start``);
-    ``phone`` (n_segments,) indexes the phone table. Adjacent segments of the
-    same phone are merged first.
+    The arrays have shape (n_frames, n_segments) (every ``stride``-th frame
+    from ``start``); ``phone`` (n_segments,) indexes the phone table. Adjacent
+    segments of the same phone are merged first. ``log_abs_tau`` is
+    ``log |tau|``, and -1e4 where a frame falls on a centre, so that
+    ``|tau|^c = exp(c log |tau|)`` is 0 there.
     """
 
-    __slots__ = ("tau", "abs_tau", "log_abs_tau", "before", "phone", "present", "onehot")
+    __slots__ = ("log_abs_tau", "before", "phone", "present", "onehot")
 
     def __init__(
         self,
@@ -114,14 +118,13 @@ class _Design:
         lo = max(int(np.searchsorted(seg_end, t[0] if t.size else 0.0, side="left")) - NEIGHBOURS, 0)
         hi = int(np.searchsorted(seg_start, t[-1] if t.size else 0.0, side="right")) + NEIGHBOURS
         centres = 0.5 * (seg_start[lo:hi] + seg_end[lo:hi])
-        self.tau = centres[None, :] - t[:, None]
-        self.abs_tau = np.abs(self.tau)
-        self.before = self.tau > 0
+        tau = centres[None, :] - t[:, None]
+        self.before = tau > 0
+        abs_tau = np.abs(tau)
+        self.log_abs_tau = np.log(abs_tau, out=np.full_like(abs_tau, -1e4), where=abs_tau > 0)
         self.phone = np.asarray(phone_rows[lo:hi], dtype=np.intp)
-        self.log_abs_tau = self.present = self.onehot = None
+        self.present = self.onehot = None
         if jacobian:
-            with np.errstate(divide="ignore"):
-                self.log_abs_tau = np.where(self.abs_tau > 0, np.log(np.maximum(self.abs_tau, 1e-300)), 0.0)
             # the phones present, and which of them each segment is (for the Jacobian)
             self.present, local = np.unique(self.phone, return_inverse=True)
             self.onehot = np.zeros((len(self.phone), len(self.present)))
@@ -140,56 +143,114 @@ class _Design:
         ]
 
 
-def _weights(design: _Design, log_alpha, theta_l, theta_r, c):
-    """Normalised dominance (n_frames, n_segments) and ``theta |tau|^c`` per entry.
+class _Scratch:
+    """Work arrays reused from one design to the next.
 
-    Computed in the log domain with the per-frame maximum subtracted, so far
-    frames never divide 0 by 0.
+    A fresh array of a few megabytes costs a page fault per 4 kB at its first
+    use, which here took longer than the arithmetic done in it.
     """
-    p = design.phone
-    theta = np.where(design.before, theta_l[p], theta_r[p])
-    power = design.abs_tau ** c[p]
-    log_d = log_alpha[p] - theta * power
-    log_d -= log_d.max(axis=1, keepdims=True)
-    w = np.exp(log_d)
-    w /= w.sum(axis=1, keepdims=True)
-    return w, theta * power
+
+    def __init__(self):
+        self.buf = np.empty(0)
+
+    def take(self, *shapes: tuple) -> list:
+        """Uninitialised arrays of these shapes, consecutive views of one buffer."""
+        sizes = [int(np.prod(sh)) for sh in shapes]
+        if self.buf.size < sum(sizes):
+            self.buf = np.empty(sum(sizes))
+        ends = np.cumsum(sizes)
+        return [self.buf[e - n : e].reshape(sh) for e, n, sh in zip(ends, sizes, shapes)]
+
+
+def _weights(design: _Design, log_alpha, theta_l, theta_r, c, out=None):
+    """Normalised dominance of every segment at every frame, for ``k`` parameter sets at once.
+
+    Parameters
+    ----------
+    design : _Design
+    log_alpha, theta_l, theta_r, c : ndarray, shape (k, n_segments)
+        Per segment of the design (the phone's values), one row per parameter set.
+    out : list of 3 ndarray, shape (k, n_frames, n_segments), optional
+        Where to write ``w``, ``rate`` and ``exponent``.
+
+    Returns
+    -------
+    w : ndarray, shape (k, n_frames, n_segments)
+        Rows sum to 1. Computed in the log domain with the per-frame maximum
+        subtracted, so far frames never divide 0 by 0.
+    rate : ndarray, shape (k, n_frames, n_segments)
+        ``theta |tau|^c`` (minus the log dominance, but for ``log alpha``).
+    exponent : ndarray, shape (k, n_frames, n_segments)
+        ``c log |tau|``.
+    """
+    if out is None:
+        out = [np.empty((len(c),) + design.log_abs_tau.shape) for _ in range(3)]
+    w, rate, exponent = out
+    np.multiply(c[:, None, :], design.log_abs_tau, out=exponent)
+    np.copyto(rate, theta_r[:, None, :])
+    np.copyto(rate, theta_l[:, None, :], where=design.before)
+    np.exp(exponent, out=w)
+    rate *= w
+    np.subtract(log_alpha[:, None, :], rate, out=w)
+    w -= w.max(axis=2, keepdims=True)
+    # Weights below e^-100 of the largest count as e^-100 (nothing, to double precision):
+    # subnormal numbers would slow every operation on them a hundredfold.
+    np.maximum(w, -100.0, out=w)
+    np.exp(w, out=w)
+    w /= w.sum(axis=2, keepdims=True)
+    return w, rate, exponent
 
 
 def cohen_massaro_trajectory(design: _Design, target, log_alpha, theta_l, theta_r, c) -> np.ndarray:
     """``F(t)`` of one channel at every frame of ``design``; parameters per phone, shape (n_phones,)."""
-    w, _ = _weights(design, log_alpha, theta_l, theta_r, c)
-    return w @ target[design.phone]
+    p = design.phone
+    w, _, _ = _weights(design, *(np.asarray(v, dtype=float)[None, p] for v in (log_alpha, theta_l, theta_r, c)))
+    return w[0] @ np.asarray(target, dtype=float)[p]
 
 
 def _unpack(x: np.ndarray, n_phones: int):
-    T, la, ll, lr, lc = x.reshape(len(BLOCKS), n_phones)
+    """Per-phone parameters of ``x`` (k, 5 * n_phones): ``T, log alpha, theta_l, theta_r, c``, each (k, n_phones)."""
+    T, la, ll, lr, lc = (x[:, b * n_phones : (b + 1) * n_phones] for b in range(len(BLOCKS)))
     return T, la, np.exp(ll), np.exp(lr), np.exp(lc)
 
 
-def _utterance_terms(params, d: _Design, y: np.ndarray, n_phones: int):
-    """Residuals of one utterance and the Jacobian columns of the phones it contains.
+def _utterance_terms(params, d: _Design, y: np.ndarray, n_phones: int, jacobian: bool = True, scratch=None):
+    """Residuals of one design for ``k`` parameter sets, and the Jacobian columns of its phones.
 
-    Returns ``r`` (n_frames,), ``J`` (n_frames, 5 * n_present) and ``cols``
-    (5 * n_present,), the columns of the full Jacobian that ``J`` holds (the
-    others are zero: a phone absent from the utterance does not touch it).
+    ``params`` are :func:`_unpack`'s arrays (k, n_phones) and ``y`` (k, n_frames);
+    ``scratch`` an optional :class:`_Scratch`.
+    Returns ``r`` (k, n_frames), ``J`` (k, n_frames, 5 * n_present) and
+    ``cols`` (5 * n_present,), the columns of the full Jacobian that ``J``
+    holds (the others are zero: a phone absent from the utterance does not
+    touch it); ``J`` and ``cols`` are None unless ``jacobian``.
     """
-    T, la, th_l, th_r, c = params
-    w, tpow = _weights(d, la, th_l, th_r, c)
-    Tseg = T[d.phone]
-    F = w @ Tseg
-    onehot = d.onehot
-    # dF/dphi = sum_s w_s dlogD_s/dphi (T_s - F) for a dominance parameter phi.
-    wdev = w * (Tseg[None, :] - F[:, None])
-    J = np.hstack(
-        [
-            w @ onehot,  # dF/dT_p
-            wdev @ onehot,  # dlogD/dlog alpha = 1
-            (wdev * -np.where(d.before, tpow, 0.0)) @ onehot,  # left rate, before the centre
-            (wdev * -np.where(d.before, 0.0, tpow)) @ onehot,  # right rate, after it
-            (wdev * -(tpow * c[d.phone] * d.log_abs_tau)) @ onehot,
-        ]
-    )  # d|tau|^c/dlog c
+    p = d.phone
+    T, la, th_l, th_r, c = (v[:, p] for v in params)
+    k, (n, S) = len(T), d.log_abs_tau.shape
+    scratch = scratch or _Scratch()
+    shape = (k, n, S)
+    work = scratch.take(shape, shape, shape, *([(k, n, len(BLOCKS), S)] if jacobian else []))
+    w, rate, exponent = _weights(d, la, th_l, th_r, c, out=work[:3])
+    F = np.einsum("kns,ks->kn", w, T)
+    if not jacobian:
+        return F - y, None, None
+    # dF/dphi = sum_s w_s dlogD_s/dphi (T_s - F) for a dominance parameter phi;
+    # dlogD/dlog alpha = 1, dlogD/dlog theta = -theta |tau|^c (its side only),
+    # dlogD/dlog c = -theta |tau|^c c log|tau|. One product with the segment-to-phone
+    # map gives all five blocks: z holds w, w dev, w dev theta |tau|^c before the centre,
+    # after it, and times c log|tau| (the last three with their signs flipped).
+    z = work[3]
+    np.copyto(z[:, :, 0], w)
+    wdev = np.subtract(T[:, None, :], F[:, :, None], out=z[:, :, 1])
+    wdev *= w
+    rate *= wdev
+    np.copyto(z[:, :, 2], 0.0)
+    np.copyto(z[:, :, 2], rate, where=d.before)
+    np.subtract(rate, z[:, :, 2], out=z[:, :, 3])
+    np.multiply(rate, exponent, out=z[:, :, 4])
+    m = len(d.present)
+    J = (z.reshape(-1, S) @ d.onehot).reshape(k, n, len(BLOCKS) * m)
+    J[:, :, 2 * m :] *= -1.0
     cols = (np.arange(len(BLOCKS))[:, None] * n_phones + d.present[None, :]).ravel()
     return F - y, J, cols
 
@@ -210,90 +271,177 @@ def residuals_and_jacobian(x: np.ndarray, designs: list, targets: list, n_phones
     r : ndarray, shape (n_total_frames,)
     J : ndarray, shape (n_total_frames, 5 * n_phones)
     """
-    params = _unpack(x, n_phones)
+    params = _unpack(np.asarray(x, dtype=float)[None, :], n_phones)
     rs, Js = [], []
     for d, y in zip(designs, targets):
-        r, Jc, cols = _utterance_terms(params, d, y, n_phones)
-        J = np.zeros((len(r), len(BLOCKS) * n_phones))
-        J[:, cols] = Jc
-        rs.append(r)
+        r, Jc, cols = _utterance_terms(params, d, np.asarray(y, dtype=float)[None, :], n_phones)
+        J = np.zeros((r.shape[1], len(BLOCKS) * n_phones))
+        J[:, cols] = Jc[0]
+        rs.append(r[0])
         Js.append(J)
     return np.concatenate(rs), np.vstack(Js)
 
 
-def normal_equations(x: np.ndarray, designs: list, targets: list, n_phones: int):
+def normal_equations(x: np.ndarray, designs: list, targets: list, n_phones: int, jacobian: bool = True):
     """``(sum r^2, J^T r, J^T J)`` of :func:`residuals_and_jacobian`, without forming ``J``.
 
     Accumulated utterance by utterance over the columns of the phones each
     one contains: the cost is that of the utterances' small Jacobians, not of
-    the corpus-long dense one.
+    the corpus-long dense one. Several channels (parameter sets) are
+    evaluated together.
+
+    Parameters
+    ----------
+    x : ndarray, shape (5 * n_phones,) or (k, 5 * n_phones)
+    designs : list of _Design
+    targets : list of ndarray, shape (n_frames,) each, or (k, n_frames) with a 2-d ``x``
+    n_phones : int
+    jacobian : bool, default True
+        False: the cost alone (``g`` and ``H`` are None).
+
+    Returns
+    -------
+    cost : float, or ndarray (k,)
+    g : ndarray, shape (5 * n_phones,) or (k, 5 * n_phones)
+    H : ndarray, shape (5 * n_phones, 5 * n_phones) or (k, 5 * n_phones, 5 * n_phones)
     """
-    params = _unpack(x, n_phones)
-    n = len(BLOCKS) * n_phones
-    cost, g, H = 0.0, np.zeros(n), np.zeros((n, n))
+    x = np.asarray(x, dtype=float)
+    single = x.ndim == 1
+    X = x[None, :] if single else x
+    params = _unpack(X, n_phones)
+    k, n = len(X), len(BLOCKS) * n_phones
+    cost = np.zeros(k)
+    g = H = None
+    if jacobian:
+        g, H = np.zeros((k, n)), np.zeros((k, n, n))
+    scratch = _Scratch()
     for d, y in zip(designs, targets):
-        r, Jc, cols = _utterance_terms(params, d, y, n_phones)
-        cost += float(r @ r)
-        g[cols] += Jc.T @ r
-        H[np.ix_(cols, cols)] += Jc.T @ Jc
+        y = np.asarray(y, dtype=float)
+        y = y[None, :] if single else y
+        # channels a few at a time: work arrays of at most WORK_SIZE numbers stay in cache
+        step = max(1, WORK_SIZE // max(d.log_abs_tau.size, 1))
+        for a in range(0, k, step):
+            part = slice(a, a + step)
+            r, J, cols = _utterance_terms([v[part] for v in params], d, y[part], n_phones, jacobian, scratch)
+            cost[part] += np.einsum("kf,kf->k", r, r)
+            if jacobian:
+                Jt = J.transpose(0, 2, 1)
+                g[part, cols] += np.matmul(Jt, r[:, :, None])[:, :, 0]
+                H[part, cols[:, None], cols[None, :]] += np.matmul(Jt, J)
+    if single:
+        return float(cost[0]), (None if g is None else g[0]), (None if H is None else H[0])
     return cost, g, H
 
 
 def levenberg_marquardt(
     normal_eq, x0: np.ndarray, lower: np.ndarray, upper: np.ndarray, *, max_nfev: int = 200, tol: float = 1e-4
 ):
-    """Minimise a sum of squares from its normal equations, within box bounds.
+    """Minimise sums of squares from their normal equations, within box bounds.
 
     Steps solve ``(H + mu diag(H)) step = -g`` (Marquardt's scaling) over the
     parameters not held at a bound by the gradient; a step is clipped to the
-    bounds and taken only if the cost falls, else ``mu``
-    grows tenfold, so the cost never increases. Stops when an accepted step
-    lowers the cost by less than ``tol`` relatively or moves ``x`` by less
-    than ``tol`` relatively, when ``mu`` exceeds 1e10, or after ``max_nfev``
+    bounds and taken only if the cost falls, so the cost never increases.
+    ``mu`` follows Nielsen's rule: after a step taken it shrinks by
+    ``max(1/3, 1 - (2 rho - 1)^3)``, ``rho`` the ratio of the actual to the
+    predicted decrease; after a step refused it grows by ``nu``, which
+    doubles with every refusal in a row. Stops when an accepted step lowers
+    the cost by less than ``tol`` relatively or moves ``x`` by less than
+    ``tol`` relatively, when ``mu`` exceeds 1e10, or after ``max_nfev``
     evaluations.
+
+    Several independent problems (one per row of a 2-d ``x0``) run in
+    lockstep: each has its own ``mu`` and stops on its own, and every
+    evaluation handles all the problems still running at once.
 
     Parameters
     ----------
     normal_eq : callable
-        ``x -> (cost, g, H)`` with ``g = J^T r`` and ``H = J^T J``.
-    x0, lower, upper : ndarray, shape (n,)
+        1-d ``x0``: ``x -> (cost, g, H)`` with ``g = J^T r`` and ``H = J^T J``.
+        2-d ``x0``: ``(X, rows) -> (cost, g, H)`` for the problems ``rows``
+        (int array) at ``X`` (len(rows), n), with shapes (len(rows),),
+        (len(rows), n) and (len(rows), n, n).
+    x0, lower, upper : ndarray, shape (n,) or (k, n) (bounds: (n,), shared)
 
     Returns
     -------
-    x : ndarray, shape (n,)
-    cost : float
-    nfev : int
+    x : ndarray, shape of ``x0``
+    cost : float or ndarray (k,)
+    nfev : int or ndarray of int (k,)
+
+    Examples
+    --------
+    >>> t = np.linspace(0, 1, 20); y = 3 * np.exp(-2 * t)
+    >>> def ne(x):
+    ...     e = np.exp(-x[1] * t); r = x[0] * e - y; J = np.stack([e, -x[0] * t * e], 1)
+    ...     return float(r @ r), J.T @ r, J.T @ J
+    >>> x, cost, nfev = levenberg_marquardt(ne, np.array([1.0, 1.0]), np.zeros(2), np.full(2, 9.0), tol=1e-12)
+    >>> np.round(x, 6).tolist()
+    [3.0, 2.0]
     """
-    x = np.clip(x0, lower, upper)
-    cost, g, H = normal_eq(x)
-    nfev, mu = 1, 1e-3
-    while nfev < max_nfev:
-        # Parameters held at a bound by the gradient stay out of the step (projected Newton).
-        free = ~(((x <= lower) & (g > 0)) | ((x >= upper) & (g < 0)))
-        if not free.any():
-            break
-        Hf = H[np.ix_(free, free)]
-        scale = np.maximum(np.diag(Hf), 1e-12 * max(np.max(np.diag(Hf)), 1e-300))
-        step = np.zeros_like(x)
-        try:
-            step[free] = np.linalg.solve(Hf + mu * np.diag(scale), -g[free])
-        except np.linalg.LinAlgError:
-            mu *= 10.0
+    x0 = np.asarray(x0, dtype=float)
+    single = x0.ndim == 1
+    if single:
+
+        def batched(X, rows, f=normal_eq):
+            c, g, H = f(X[0])
+            return np.array([c]), g[None], H[None]
+
+        X = np.clip(x0, lower, upper)[None, :]
+        evaluate = batched
+    else:
+        X = np.clip(x0, lower, upper)
+        evaluate = normal_eq
+    k = len(X)
+    rows = np.arange(k)
+    cost, g, H = (np.array(v, dtype=float) for v in evaluate(X, rows))
+    nfev = np.ones(k, dtype=int)
+    mu, nu = np.full(k, 1e-3), np.full(k, 2.0)
+    running = nfev < max_nfev
+    while running.any():
+        trial, predicted = {}, {}
+        for i in np.flatnonzero(running):
+            x = X[i]
+            # Parameters held at a bound by the gradient stay out of the step (projected Newton).
+            free = ~(((x <= lower) & (g[i] > 0)) | ((x >= upper) & (g[i] < 0)))
+            if not free.any():
+                running[i] = False
+                continue
+            Hf = H[i][np.ix_(free, free)]
+            scale = np.maximum(np.diag(Hf), 1e-12 * max(np.max(np.diag(Hf)), 1e-300))
+            step = np.zeros_like(x)
+            try:
+                step[free] = np.linalg.solve(Hf + mu[i] * np.diag(scale), -g[i][free])
+            except np.linalg.LinAlgError:
+                mu[i] *= nu[i]
+                nu[i] *= 2.0
+                running[i] = mu[i] <= 1e10
+                continue
+            trial[i] = np.clip(x + step, lower, upper)
+            s = trial[i] - x
+            predicted[i] = -(2.0 * s @ g[i] + s @ H[i] @ s)  # decrease of the Gauss-Newton model
+        if not trial:
             continue
-        x_new = np.clip(x + step, lower, upper)
-        new = normal_eq(x_new)
-        nfev += 1
-        if new[0] < cost:
-            done = cost - new[0] <= tol * cost or np.linalg.norm(x_new - x) <= tol * (np.linalg.norm(x) + tol)
-            x, (cost, g, H) = x_new, new
-            mu = max(mu / 10.0, 1e-12)
-            if done:
-                break
-        else:
-            mu *= 10.0
-            if mu > 1e10:
-                break
-    return x, cost, nfev
+        ids = np.fromiter(trial, dtype=int)
+        new_cost, new_g, new_H = evaluate(np.stack([trial[i] for i in ids]), ids)
+        for j, i in enumerate(ids):
+            nfev[i] += 1
+            if new_cost[j] < cost[i]:
+                gain = (cost[i] - new_cost[j]) / predicted[i] if predicted[i] > 0 else 0.0
+                done = cost[i] - new_cost[j] <= tol * cost[i] or np.linalg.norm(trial[i] - X[i]) <= tol * (
+                    np.linalg.norm(X[i]) + tol
+                )
+                X[i], cost[i], g[i], H[i] = trial[i], new_cost[j], new_g[j], new_H[j]
+                mu[i] = max(mu[i] * max(1.0 / 3.0, 1.0 - (2.0 * gain - 1.0) ** 3), 1e-12)
+                nu[i] = 2.0
+                running[i] = not done
+            else:
+                mu[i] *= nu[i]
+                nu[i] *= 2.0
+                running[i] = mu[i] <= 1e10
+            running[i] &= nfev[i] < max_nfev
+    if single:
+        return X[0], float(cost[0]), int(nfev[0])
+    return X, cost, nfev
 
 
 class CohenMassaro(Synthesizer):
@@ -386,7 +534,7 @@ class CohenMassaro(Synthesizer):
         per_utt = self._designs(corpus)
         designs = [d for ds in per_utt for d in ds]
         stride = self._stride(corpus.frame_rate)
-        n_total = sum(len(d.tau) for d in designs)
+        n_total = sum(d.log_abs_tau.shape[0] for d in designs)
         dur = np.mean(np.concatenate([u.alignment.durations for u in corpus]))
         # Start: dominance falls to 1/e one mean segment duration from the centre.
         x0_dom = np.concatenate([np.zeros(P), np.full(P, -np.log(dur)), np.full(P, -np.log(dur)), np.zeros(P)])
@@ -395,53 +543,54 @@ class CohenMassaro(Synthesizer):
         lo[4 * P :], hi[4 * P :] = np.log(self.c_bounds[0]), np.log(self.c_bounds[1])
         lo[2 * P : 4 * P], hi[2 * P : 4 * P] = np.log(1e-3), np.log(1e6)
         means = PhoneMean().fit(corpus).table_  # rows in the order of phone_counts_, as ours
-        out = {k: np.zeros((P, C)) for k in ("target", "alpha", "theta_left", "theta_right", "c")}
-        self.cost_ = np.zeros(C)
-        self.n_fev_ = np.zeros(C, dtype=int)
-        lam = np.sqrt(self.ridge * n_total)
-        for ch in progress.track(range(C), "Cohen-Massaro", unit="channel", labels=list(corpus.channels)):
-            ys = [u.trajectory[::stride, ch] for u in corpus]
-            mu, sd = np.mean(np.concatenate(ys)), np.std(np.concatenate(ys)) + 1e-12
-            # standardised (one ridge weight fits every channel), cut as the designs' blocks
-            ys = [part for y, ds in zip(ys, per_utt) for part in _split(np.asarray((y - mu) / sd), ds)]
-            x0 = np.concatenate([(means[:, ch] - mu) / sd, x0_dom])
-            x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+        # Every channel standardised (one ridge weight fits them all), cut as the designs'
+        # blocks, channels first: the channels' fits run in lockstep, evaluated together.
+        Y = [u.trajectory[::stride] for u in corpus]
+        mu = np.mean(np.concatenate(Y), axis=0)
+        sd = np.std(np.concatenate(Y), axis=0) + 1e-12
+        ys = [np.ascontiguousarray(part.T) for y, ds in zip(Y, per_utt) for part in _split((y - mu) / sd, ds)]
+        X0 = np.concatenate([(means - mu) / sd, np.broadcast_to(x0_dom[:, None], (4 * P, C))]).T
+        X0 = np.clip(X0, lo + 1e-9, hi - 1e-9)
+        lam2 = self.ridge * n_total
+        dom = np.arange(P, 5 * P)
 
-            dom = np.arange(P, 5 * P)
+        with progress.task("Cohen-Massaro", C, unit="channel") as bar:
+            finished = np.zeros(C, dtype=bool)
 
-            def penalised(x, ys=ys, x0=x0, dom=dom):
-                cost, g, H = normal_equations(x, designs, ys, P)
-                dev = x[dom] - x0[dom]
-                g[dom] += lam**2 * dev
-                H[dom, dom] += lam**2
-                return cost + lam**2 * float(dev @ dev), g, H
+            def penalised(X, rows):
+                cost, g, H = normal_equations(X, designs, [y[rows] for y in ys], P)
+                dev = X[:, dom] - X0[rows][:, dom]
+                g[:, dom] += lam2 * dev
+                H[:, dom, dom] += lam2
+                cost += lam2 * np.einsum("kp,kp->k", dev, dev)
+                for ch in sorted(set(range(C)) - set(rows.tolist()) - set(np.flatnonzero(finished))):
+                    finished[ch] = True  # no longer evaluated: its fit has stopped
+                    bar.step(str(corpus.channels[ch]), index=ch)
+                return cost, g, H
 
-            x, cost, nfev = levenberg_marquardt(penalised, x0, lo, hi, max_nfev=self.max_nfev, tol=self.tol)
-            T, la, th_l, th_r, c = _unpack(x, P)
-            out["target"][:, ch] = mu + sd * T
-            out["alpha"][:, ch] = np.exp(la)
-            out["theta_left"][:, ch], out["theta_right"][:, ch], out["c"][:, ch] = th_l, th_r, c
-            self.cost_[ch] = normal_equations(x, designs, ys, P)[0] / n_total * sd**2
-            self.n_fev_[ch] = nfev
-        self.target_, self.alpha_ = out["target"], out["alpha"]
-        self.theta_left_, self.theta_right_, self.c_ = out["theta_left"], out["theta_right"], out["c"]
+            X, _, nfev = levenberg_marquardt(penalised, X0, lo, hi, max_nfev=self.max_nfev, tol=self.tol)
+            for ch in np.flatnonzero(~finished):
+                bar.step(str(corpus.channels[ch]), index=ch)
+        T, la, th_l, th_r, c = _unpack(X, P)
+        self.target_ = mu + sd * T.T
+        self.alpha_ = np.exp(la.T)
+        self.theta_left_, self.theta_right_, self.c_ = th_l.T, th_r.T, c.T
+        self.cost_ = normal_equations(X, designs, ys, P, jacobian=False)[0] / n_total * sd**2
+        self.n_fev_ = np.asarray(nfev, dtype=int)
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         index = {p: i for i, p in enumerate(self.phone_counts_)}
         rows = np.fromiter((index[p] for p in self._known_labels(alignment, self.unknown_phone)), dtype=np.intp)
         parts = []
         for d in _Design.blocks(alignment, rows, self.frame_rate_, n_frames, jacobian=False):
-            # all channels at once: (frames, segments, channels)
+            # all channels at once: (channels, frames, segments)
             p = d.phone
-            theta = np.where(d.before[:, :, None], self.theta_left_[p], self.theta_right_[p])
-            log_d = np.log(self.alpha_[p]) - theta * d.abs_tau[:, :, None] ** self.c_[p]
-            log_d -= log_d.max(axis=1, keepdims=True)
-            w = np.exp(log_d)
-            parts.append(np.einsum("fsc,sc->fc", w, self.target_[p]) / w.sum(axis=1))
+            w, _, _ = _weights(d, np.log(self.alpha_[p].T), self.theta_left_[p].T, self.theta_right_[p].T, self.c_[p].T)
+            parts.append(np.matmul(w, self.target_[p].T[:, :, None])[:, :, 0].T)
         return np.concatenate(parts)
 
 
 def _split(y: np.ndarray, designs: list) -> list:
     """``y`` (one utterance's fitted frames) cut into the frames of each block design."""
-    cuts = np.cumsum([len(d.tau) for d in designs])[:-1]
+    cuts = np.cumsum([len(d.log_abs_tau) for d in designs])[:-1]
     return np.split(y, cuts)

@@ -16,17 +16,21 @@ from __future__ import annotations
 import copy
 import inspect
 import os
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from dam._params import Interval, InvalidParameterError, Options, TupleOf, validate_params
-from dam.corpus.data import MAX_FRAME_RATE, Alignment, Corpus, DataError
+from dam.corpus.data import MAX_FRAME_RATE, Alignment, Corpus, DataError, Utterance
 from dam.modelfile import ModelFileError, StateCounts, StateNames, load, write_model_file
 
 #: One prediction holds at most this many values (2 GiB of float64; a day at 100 Hz with
 #: 300 channels): larger is refused before anything is allocated (issue 12).
 MAX_PREDICTION_VALUES = 2**28
+
+# get_tags() of every class asked so far (tags are class constants; weak keys let test classes go)
+_TAGS_OF: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 __all__ = [
     "Estimator",
@@ -299,6 +303,9 @@ class Synthesizer(Estimator):
         TypeError
             A class sets a tag the register does not know, or a value of the wrong type.
         """
+        cached = _TAGS_OF.get(cls)
+        if cached is not None:  # predict reads a tag on every call
+            return dict(cached)
         tags = {name: tag.default for name, tag in TAGS.items()}
         for klass in reversed(cls.__mro__):
             for k, v in (klass.__dict__.get("_tags") or {}).items():
@@ -308,7 +315,8 @@ class Synthesizer(Estimator):
                     )
                 TAGS[k].check(klass.__name__, v)
                 tags[k] = v
-        return tags
+        _TAGS_OF[cls] = tags
+        return dict(tags)
 
     @classmethod
     def get_test_params(cls) -> list[dict]:
@@ -415,9 +423,6 @@ class Synthesizer(Estimator):
             )
 
     def _predict_one(self, alignment) -> np.ndarray:
-        from dam.corpus.data import Utterance
-        from dam.corpus.formats.audio import AudioClip
-
         audio = "audio" in self.reads()
         if isinstance(alignment, Utterance) and not audio:
             alignment = alignment.alignment  # a phone-driven model reads the utterance's alignment
@@ -425,20 +430,22 @@ class Synthesizer(Estimator):
             n = alignment.n_frames(self.frame_rate_)
             self._check_output_size(alignment, n)
             out = np.asarray(self._predict(alignment, n), dtype=float)
-        elif audio and isinstance(alignment, (Utterance, AudioClip)):
+        else:
+            from dam.corpus.formats.audio import AudioClip
+
+            if not (audio and isinstance(alignment, (Utterance, AudioClip))):
+                raise TypeError(
+                    f"{type(self).__name__}.predict expects a dam.Alignment, a dam.Utterance"
+                    f"{' or a dam.corpus.AudioClip' if audio else ''} (or a list of them), "
+                    f"got {type(alignment).__name__}"
+                )
             timing = alignment.alignment if isinstance(alignment, Utterance) else alignment
             n = timing.n_frames(self.frame_rate_)
             self._check_output_size(timing, n)
             out = np.asarray(self._predict_audio(alignment, n), dtype=float)
-        else:
-            raise TypeError(
-                f"{type(self).__name__}.predict expects a dam.Alignment, a dam.Utterance"
-                f"{' or a dam.corpus.AudioClip' if audio else ''} (or a list of them), "
-                f"got {type(alignment).__name__}"
-            )
         if out.shape != (n, len(self.channels_)):
             raise RuntimeError(f"{type(self).__name__} produced shape {out.shape}, expected {(n, len(self.channels_))}")
-        if not np.all(np.isfinite(out)):
+        if not np.isfinite(out.sum()) and not np.isfinite(out).all():  # one reduction when all is finite
             raise RuntimeError(f"{type(self).__name__} produced non-finite values for {alignment!r}")
         return out
 

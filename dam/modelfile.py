@@ -363,7 +363,8 @@ class StateArray:
     finite : bool, default True
         Float values must be finite.
     optional : bool, default False
-        The value may be None.
+        The value may be None, or absent (a file written before the entry
+        was learned).
 
     Examples
     --------
@@ -533,9 +534,9 @@ def check_state(cls, state: dict, source) -> None:
     """Check learned ``state`` against ``cls``'s declared ``_state_schema``.
 
     Every name must be a learned-attribute name (``word_``) that the class does
-    not define itself; every declared entry must be present and match its
-    declaration (dtype, shape, dimensions consistent across entries, finite,
-    in range). A class that declares a schema of its own gets nothing else.
+    not define itself; every declared entry must be present (an optional
+    one may be absent) and match its declaration (dtype, shape, dimensions
+    consistent across entries, finite, in range). A class that declares a schema of its own gets nothing else.
 
     Raises
     ------
@@ -555,7 +556,7 @@ def check_state(cls, state: dict, source) -> None:
                 f"{source}: field 'state.{key}' would replace the {cls.__name__} attribute of that name"
             )
     schema = state_schema(cls)
-    missing = [k for k in schema if k not in state]
+    missing = [k for k in schema if k not in state and not getattr(schema[k], "optional", False)]
     if missing:
         raise ModelFileError(f"{source}: field 'state.{missing[0]}' is missing: this is not a complete {cls.__name__}")
     if _declares_schema(cls):
@@ -566,7 +567,7 @@ def check_state(cls, state: dict, source) -> None:
             )
     dims: dict = {}
     for key, spec in schema.items():
-        value = state[key]
+        value = state.get(key)  # an absent optional entry is None
         try:
             if spec is None:  # declared, any JSON-able value
                 continue

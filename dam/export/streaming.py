@@ -312,6 +312,7 @@ class StreamingSynthesizer(_Stream):
             extrapolate=m.extrapolate,
             eps=self._eps,
             tol=self._tol,
+            support=m._support_of(glob),
         )
 
     def _emit(self, bound_frames: int) -> np.ndarray:

@@ -422,10 +422,16 @@ class ModeGraph:
                         row[:g] = c[:g]
                         rows.append(row)
         order = np.argsort(codes, kind="stable") if codes else np.zeros(0, dtype=np.int64)
-        self.tri_codes = np.asarray(codes, dtype=np.int64)[order]
-        self.tri_counts = np.asarray(rows, dtype=float).reshape(-1, G)[order]
-        self.left_seen = self.left.sum(axis=2) > 0
-        self.right_seen = self.right.sum(axis=2) > 0
+        # a last code above every real one (with zero counts): a lookup always lands on a row
+        self.tri_codes = np.append(np.asarray(codes, dtype=np.int64)[order], np.iinfo(np.int64).max)
+        self.tri_counts = np.vstack([np.asarray(rows, dtype=float).reshape(-1, G)[order], np.zeros((1, G))])
+        # rows by (phone, context) code, and whether that context was seen (1.0) or not (0.0)
+        self.left_rows, self.right_rows = self.left.reshape(-1, G), self.right.reshape(-1, G)
+        self.left_seen = (self.left_rows.sum(axis=1) > 0).astype(float)
+        self.right_seen = (self.right_rows.sum(axis=1) > 0).astype(float)
+        # all four tables in one, so the counts behind every level are one gather
+        self._rows = np.vstack((self.unigram, self.left_rows, self.right_rows, self.tri_counts))
+        self._offsets = np.cumsum([0, P, P * (B + 1), P * (B + 1)])
 
     def layers(self, labels):
         """Phone index, first global mode and number of modes of every segment (labels must be known)."""
@@ -443,37 +449,36 @@ class ModeGraph:
         level : ndarray of int, shape (n_segments,)
             Index into :attr:`LEVELS`.
         """
+        # One pass over every level at once (few numpy steps: a one-phone call pays them all).
         J, G = len(pid), self.G
         nll = np.zeros((J, G))
         level = np.full(J, 2)
-        multi = np.flatnonzero(count > 1)
+        multi = (count > 1).nonzero()[0]
         if multi.size:
-            B = len(self.names)
-            ctx = np.concatenate(([B], pid, [B]))
-            p, L, R = pid[multi], ctx[multi], ctx[multi + 2]
-            g = count[multi][:, None].astype(float)
-
-            def smoothed(c):
-                return (c + alpha) / (c.sum(axis=1, keepdims=True) + alpha * g)
-
-            prob = smoothed(self.unigram[p])
-            ls, rs = self.left_seen[p, L], self.right_seen[p, R]
-            bi = ls | rs
-            if bi.any():
-                both = ls[:, None] * smoothed(self.left[p, L]) + rs[:, None] * smoothed(self.right[p, R])
-                n_seen = ls.astype(float) + rs.astype(float)  # (bool + bool is a logical or)
-                prob[bi] = both[bi] / n_seen[bi, None]
-                level[multi[bi]] = 1
-            if self.tri_codes.size:
-                code = (p * (B + 1) + L) * (B + 1) + R
-                pos = np.minimum(np.searchsorted(self.tri_codes, code), self.tri_codes.size - 1)
-                hit = self.tri_codes[pos] == code
-                if hit.any():
-                    tc = self.tri_counts[pos[hit]]
-                    prob[hit] = (tc + alpha) / (tc.sum(axis=1, keepdims=True) + alpha * g[hit])
-                    level[multi[hit]] = 0
-            with np.errstate(divide="ignore"):
+            B1 = len(self.names) + 1  # context B1 - 1: the utterance edge
+            ctx = np.concatenate(([B1 - 1], pid, [B1 - 1]))
+            p = pid[multi]
+            kl = p * B1 + ctx[multi]  # (phone, left) and (phone, right) rows
+            kr = p * B1 + ctx[multi + 2]
+            code = kl * B1 + ctx[multi + 2]
+            pos = self.tri_codes.searchsorted(code)
+            hit = self.tri_codes[pos] == code
+            # counts behind each level: unigram, left and right bigram, trigram; smoothed
+            c = self._rows.take(np.concatenate((p, kl, kr, pos)) + self._offsets.repeat(len(p)), axis=0)
+            c = c.reshape(4, len(p), G)
+            prob = (c + alpha) / (np.add.reduce(c, axis=2, keepdims=True) + alpha * count[multi][:, None])
+            # bigram: the mean over the sides seen in training
+            ls, rs = self.left_seen[kl], self.right_seen[kr]
+            n_seen = ls + rs
+            both = (ls[:, None] * prob[1] + rs[:, None] * prob[2]) / np.maximum(n_seen, 1.0)[:, None]
+            bi = n_seen > 0
+            prob = np.where(hit[:, None], prob[3], np.where(bi[:, None], both, prob[0]))
+            level[multi] = np.where(hit, 0, np.where(bi, 1, 2))
+            if alpha > 0:  # every probability positive
                 nll[multi] = -np.log(prob)
+            else:
+                with np.errstate(divide="ignore"):
+                    nll[multi] = -np.log(prob)
         nll[np.arange(G) >= count[:, None]] = np.inf
         return nll, level
 

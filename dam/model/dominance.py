@@ -20,6 +20,8 @@ numpy only: this module is on the load + predict path of a saved model.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["dominance", "dominance_of_distance", "dominance_dsigma", "reach", "outside_distance"]
@@ -28,7 +30,7 @@ __all__ = ["dominance", "dominance_of_distance", "dominance_dsigma", "reach", "o
 def outside_distance(t):
     """Distance of local time ``t`` from the active interval [0, 1] (0 inside)."""
     t = np.asarray(t, dtype=float)
-    return np.maximum(-t, 0.0) + np.maximum(t - 1.0, 0.0)
+    return np.maximum(np.maximum(-t, t - 1.0), 0.0)  # at most one of -t and t - 1 is positive
 
 
 def reach(sigma, eps: float = 1e-8, tol: float = 0.0):
@@ -42,7 +44,7 @@ def reach(sigma, eps: float = 1e-8, tol: float = 0.0):
         return np.full(sigma.shape, np.inf)
     if tol >= 1.0:
         return np.zeros(sigma.shape)
-    return np.sqrt(-(sigma * sigma + eps) * np.log(tol))
+    return np.sqrt((sigma * sigma + eps) * -math.log(tol))
 
 
 def dominance(t, sigma, eps: float = 1e-8, tol: float = 0.0):
@@ -67,14 +69,14 @@ def dominance(t, sigma, eps: float = 1e-8, tol: float = 0.0):
     return dominance_of_distance(u * u, np.asarray(sigma, dtype=float) ** 2 + eps, tol)
 
 
-def dominance_of_distance(u2, s2, tol: float = 0.0) -> np.ndarray:
+def dominance_of_distance(u2, s2, tol: float = 0.0, out=None) -> np.ndarray:
     """Eq. (1) from the squared distance ``u2`` outside [0, 1] and ``s2 = sigma^2 + eps``.
 
     The core of :func:`dominance`, for callers that hold ``u^2`` per frame and
     ``s2`` per segment already (synthesis evaluates it for every frame/segment
-    pair). Broadcasts ``u2`` against ``s2``.
+    pair). Broadcasts ``u2`` against ``s2``; ``out``, if given, receives the result.
     """
-    d = np.asarray(np.exp(-u2 / s2))
+    d = np.asarray(np.exp(np.negative(u2 / s2), out=out))
     if tol > 0.0:
         d[d < tol] = 0.0
     return d

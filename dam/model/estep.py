@@ -23,7 +23,7 @@ from functools import cached_property
 
 import numpy as np
 
-from dam.model.animeme import basis
+from dam.model.animeme import basis, trained_support
 from dam.model.dominance import dominance
 from dam.model.synthesis import segment_windows
 
@@ -36,6 +36,7 @@ __all__ = [
     "normal_equations",
     "solve_normal_equations",
     "fitted_values",
+    "animeme_support",
 ]
 
 
@@ -353,3 +354,26 @@ def fitted_values(occ: Occurrences, coef: np.ndarray, sigma: np.ndarray, pr=None
         S = np.bincount(row, weights=D, minlength=occ.n_rows)
         num = num / S
     return num, (k, row, t, D, A, S)
+
+
+def animeme_support(occ: Occurrences, sigma: np.ndarray) -> np.ndarray:
+    """Per mode, the local times where rendering the training utterances evaluates its animeme.
+
+    The frames :func:`dam.model.synthesis.concatenate` visits for every
+    training occurrence, in its training mode, with the fitted sigmas (the
+    window of the largest sigma over channels, as synthesis uses); see
+    :func:`dam.model.animeme.trained_support`.
+
+    Parameters
+    ----------
+    occ : Occurrences
+    sigma : ndarray, shape (n_modes, n_channels)
+
+    Returns
+    -------
+    ndarray, shape (n_modes, 2)
+    """
+    k, _, t = segment_windows(
+        occ.starts, occ.ends, sigma[occ.mode].max(axis=1), occ.frame_rate, occ.n_frames, occ.eps, occ.tol
+    )
+    return trained_support(occ.mode[k], t, occ.n_modes)

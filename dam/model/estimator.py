@@ -50,9 +50,11 @@ class DAM(Synthesizer):
         both neighbours in full around every phone boundary (dominance is 1 at
         t = 0 and t = 1 of adjacent phones); on the bundled VocalTractLab
         corpus the weighted average is clearly ahead. See Notes.
-    extrapolate : {"polynomial", "hold"}, default "polynomial"
-        The animeme outside [0, 1]: the polynomial itself (the paper) or the
-        value at the nearer edge.
+    extrapolate : {"polynomial", "hold", "trained"}, default "polynomial"
+        The animeme outside [0, 1]: the polynomial itself (the paper), the
+        value at the nearer edge, or the polynomial wherever training
+        evaluated the mode (``support_``) and its value at the nearer edge of
+        that range beyond it (``dam-paper``; see :class:`DAMPaper`).
     modes : {"affinity", "single"}, default "affinity"
         Modes per phone by affinity propagation, or one mode per phone.
     n_resample : int, default 20
@@ -117,6 +119,12 @@ class DAM(Synthesizer):
         (:meth:`modes_of` gives the paper's monomial ``a^0 .. a^M``).
     sigma_ : ndarray, shape (n_modes, n_channels)
         Dominance fall-off of every mode, per channel, in phone durations.
+    support_ : ndarray, shape (n_modes, 2), or None
+        Lowest and highest local time where rendering the training
+        utterances (each occurrence in its training mode) evaluates every
+        mode's animeme, [0, 1] included
+        (:func:`dam.model.estep.animeme_support`); used by
+        ``extrapolate="trained"``. None for a model given its parameters.
     mode_phone_ : list of str, length n_modes
         Phone of every (global) mode; a phone's modes are consecutive.
     phone_modes_ : dict str -> [first, count]
@@ -200,6 +208,8 @@ class DAM(Synthesizer):
         "context_counts_": None,
         "coef_": StateArray("float", ("n_modes", None, "n_channels")),
         "sigma_": StateArray("float", ("n_modes", "n_channels"), low=0),
+        # None: given parameters (from_parameters) or a file from before it was learned
+        "support_": StateArray("float", ("n_modes", 2), optional=True),
         "loss_curve_": None,
         "n_iter_": StateArray("int", ("n_channels",), low=0),
         "converged_": StateArray("bool", ("n_channels",)),
@@ -280,7 +290,7 @@ class DAM(Synthesizer):
 
     def _fit_em(self, corpus: Corpus) -> None:
         from dam.model.em import fit_em
-        from dam.model.estep import Occurrences
+        from dam.model.estep import Occurrences, animeme_support
         from dam.model.modes import cluster_modes, resample_occurrences
 
         Y = np.concatenate(corpus.trajectories)
@@ -367,6 +377,7 @@ class DAM(Synthesizer):
             ),
         )
         self.coef_, self.sigma_ = coef, sigma
+        self.support_ = animeme_support(occ, sigma)
         self.loss_curve_, self.n_iter_, self.converged_ = curves, n_iter, converged
         self._build_graph()
 
@@ -434,6 +445,7 @@ class DAM(Synthesizer):
         model.phone_counts_ = {p: 1 for p in sorted(phones)}
         model.coef_ = np.concatenate(coefs)
         model.sigma_ = np.concatenate(sigmas).copy()
+        model.support_ = None  # no training: the polynomial on the whole time line
         model.mode_phone_ = mode_phone
         model.phone_modes_ = phone_modes
         model.mode_counts_ = np.zeros(len(mode_phone), dtype=int)
@@ -456,7 +468,7 @@ class DAM(Synthesizer):
         self._mode_graph = ModeGraph(self.phone_modes_, self.context_counts_)
 
     def _set_state(self, state: dict) -> None:
-        super()._set_state(state)
+        super()._set_state({"support_": None, **state})
         self._build_graph()
 
     def _graph_of(self) -> ModeGraph:
@@ -580,7 +592,13 @@ class DAM(Synthesizer):
             extrapolate=self.extrapolate,
             eps=float(self.eps),
             tol=float(self.dominance_tol),
+            support=self._support_of(glob),
         )
+
+    def _support_of(self, glob):
+        """``support_`` of the modes ``glob`` when ``extrapolate="trained"`` uses it, else None."""
+        support = self.__dict__.get("support_")
+        return None if self.extrapolate != "trained" or support is None else support[glob]
 
     def _predict(self, alignment: Alignment, n_frames: int) -> np.ndarray:
         return self.synthesize(alignment, n_frames=n_frames)
@@ -623,7 +641,9 @@ class DAM(Synthesizer):
 
     def animeme_curve(self, phone: str, mode: int, t) -> np.ndarray:
         """``A(t)`` of one mode at local times ``t``, shape (len(t), n_channels)."""
-        return _animeme.evaluate(self.coef_[self._mode_row(phone, mode)], t, self.extrapolate)
+        g = self._mode_row(phone, mode)
+        support = self._support_of(g)
+        return _animeme.evaluate(self.coef_[g], t, self.extrapolate, None if support is None else tuple(support))
 
     def dominance_curve(self, phone: str, mode: int, t) -> np.ndarray:
         """``D(t)`` of one mode at local times ``t``, shape (len(t), n_channels)."""
@@ -700,21 +720,36 @@ class DAMPaper(DAM):
     """The paper's literal DAM, in one word: Eq. (2) as printed (the plain sum), M = 4.
 
     Chen et al. (2012) as written: ``C*(t) = sum_j D_j(t_j) A_j(t_j)`` with
-    quartic animemes evaluated on the whole time line (``normalize=False,
-    degree=4, extrapolate="polynomial"``); every other choice is the DAM's.
+    quartic animemes ``A(t) = sum_m a^m t^m`` on the time line
+    (``normalize=False, degree=4``); every other choice is the DAM's.
     ``dam-m0`` with ``normalize=False`` is its M = 0 row. Why the default
     ``dam`` uses the weighted average instead, with numbers: the README's DAM
     section.
+
+    One choice the paper does not make: outside the local times where
+    training evaluated a mode (``support_``), the animeme is held at its
+    value at the edge of that range (``extrapolate="trained"``) instead of
+    following the quartic that no data constrained there. The paper defines
+    ``C(t) = D(t) A(t)`` for all t and fits ``A`` by Eq. (4) on the training
+    frames; wherever those frames reach, the two agree, so rendering the
+    training utterances is unchanged. Where they do not (a mode fitted only
+    as an utterance's first silence, never preceded by a frame, later chosen
+    inside an utterance) the quartic's left tail had no data: on ``tiny`` it
+    reached -4.0 on the lip aperture 1.2 durations before the silence and
+    drove a frame to -0.36 where the data span 0.02-0.83 (issue 11,
+    ``tests/model/test_short_segments.py``). ``extrapolate="polynomial"``
+    restores the whole-line quartic.
     """
 
     name = "dam-paper"
-    _preset = {"normalize": False, "degree": 4, "extrapolate": "polynomial"}
+    _preset = {"normalize": False, "degree": 4, "extrapolate": "trained"}
 
 
 def _weighted(w: float, cost: np.ndarray) -> np.ndarray:
     """``w * cost`` with a missing mode's +inf kept +inf (also for ``w = 0``, an ablation)."""
-    with np.errstate(invalid="ignore"):  # 0 * inf, masked out by the where
-        return np.where(np.isinf(cost), np.inf, float(w) * cost)
+    if w > 0:  # (w is >= 0)
+        return float(w) * cost
+    return np.where(np.isinf(cost), np.inf, 0.0)
 
 
 def _context_counts(corpus, local, phone_modes) -> dict:

@@ -21,10 +21,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from dam.model.animeme import EXTRAPOLATE, legendre_to_monomial
+from dam.model.animeme import EXTRAPOLATE, animeme_time, legendre_to_monomial
 from dam.model.dominance import dominance_of_distance, outside_distance, reach
 
 __all__ = ["segment_windows", "concatenate"]
+
+#: :func:`concatenate` evaluates every (frame, segment) pair when there are at most this
+#: many (one to three phones), else only the pairs of :func:`segment_windows`: the
+#: measured crossover of the two on one core (benchmarks/bench_dam.py).
+DENSE_PAIRS = 400
 
 
 def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int, eps: float = 1e-8, tol: float = 1e-4):
@@ -54,18 +59,25 @@ def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int, e
     starts = np.asarray(starts, dtype=float)
     ends = np.asarray(ends, dtype=float)
     dur = ends - starts
-    r = reach(sigma_max, eps, tol)
     if tol <= 0.0:  # no truncation: the window is the whole utterance
         r = np.asarray(n_frames) / frame_rate / np.maximum(dur, 1e-12) + 1.0
+    else:
+        r = reach(sigma_max, eps, tol)
+    r = r * dur
     # (np.minimum/np.maximum rather than np.clip: cheaper per call, same values)
-    lo = np.minimum(np.maximum(np.ceil((starts - r * dur) * frame_rate - 1e-9), 0), n_frames).astype(np.int64)
-    hi = np.minimum(np.maximum(np.floor((ends + r * dur) * frame_rate + 1e-9) + 1, lo), n_frames).astype(np.int64)
+    lo = np.minimum(np.maximum(np.ceil((starts - r) * frame_rate - 1e-9), 0), n_frames).astype(np.int64)
+    hi = np.minimum(np.maximum(np.floor((ends + r) * frame_rate + 1e-9) + 1, lo), n_frames).astype(np.int64)
     counts = hi - lo
-    seg = np.repeat(np.arange(len(starts)), counts)
-    # frame = lo[seg] + position within the segment's window
-    first = np.cumsum(counts) - counts
-    frame = np.arange(seg.size) + (lo - first)[seg]
-    t = (frame / frame_rate - starts[seg]) / dur[seg]
+    if len(counts) == 1:  # (one phone per call, as a streaming caller makes them)
+        frame = np.arange(lo[0], hi[0])
+        seg = np.zeros(frame.size, dtype=np.int64)
+        t = (frame / frame_rate - starts[0]) / dur[0]
+    else:
+        seg = np.repeat(np.arange(len(starts)), counts)
+        # frame = lo[seg] + position within the segment's window
+        first = np.cumsum(counts) - counts
+        frame = np.arange(seg.size) + (lo - first)[seg]
+        t = (frame / frame_rate - starts[seg]) / dur[seg]
     return seg, frame, t
 
 
@@ -81,6 +93,7 @@ def concatenate(
     extrapolate: str = "polynomial",
     eps: float = 1e-8,
     tol: float = 1e-4,
+    support=None,
 ) -> np.ndarray:
     """Eq. (2): the control trajectories of a sequence of chosen animemes.
 
@@ -97,9 +110,14 @@ def concatenate(
     normalize : bool, default False
         False: plain sum (Eq. 2 as printed). True: divide by the summed
         dominance (the weighted average; :class:`dam.model.DAM`'s default).
-    extrapolate : {"polynomial", "hold"}
+    extrapolate : {"polynomial", "hold", "trained"}
+        The animeme outside [0, 1] (:func:`dam.model.animeme.animeme_time`).
     eps, tol : float
         Dominance constant and truncation tolerance.
+    support : ndarray, shape (n_segments, 2), optional
+        For ``extrapolate="trained"``: the local-time range training evaluated
+        each segment's animeme at (:func:`dam.model.animeme.trained_support`);
+        None: the polynomial on the whole time line.
 
     Returns
     -------
@@ -109,25 +127,51 @@ def concatenate(
         raise ValueError(f"parameter 'extrapolate' is {extrapolate!r}; use one of {EXTRAPOLATE}")
     coef = np.asarray(coef, dtype=float)
     sigma = np.asarray(sigma, dtype=float)
-    n_ch = coef.shape[2]
-    seg, frame, t = segment_windows(starts, ends, sigma.max(axis=1), frame_rate, n_frames, eps, tol)
-    # Per segment first (small arrays), then one gather per pair: the animeme
-    # by Horner's rule on the power-series coefficients (the same polynomial),
-    # the dominance from u^2 per pair and sigma^2 + eps per segment
-    # (x.take(seg, axis=0): much faster than x[seg] on a 2-D x).
+    starts = np.asarray(starts, dtype=float)
+    n_seg, n_ch = sigma.shape
+    if n_frames * n_seg <= DENSE_PAIRS:
+        # A few phones (a streaming caller's): every (frame, segment) pair, in
+        # fewer numpy steps than windowing. Pairs outside the windows have
+        # dominance below tol, which truncation zeroes: the same sum.
+        t = (np.arange(n_frames)[:, None] / frame_rate - starts) / (np.asarray(ends, dtype=float) - starts)
+
+        def per_pair(x):  # (n_seg, ...) broadcasts against (n_frames, n_seg, ...)
+            return x
+
+    else:
+        seg, frame, t = segment_windows(starts, ends, sigma.max(axis=1), frame_rate, n_frames, eps, tol)
+
+        def per_pair(x):  # x.take(seg, axis=0): much faster than x[seg] on a 2-D x
+            return x.take(seg, axis=0)
+
+    # Per segment first (small arrays), then per pair: the animeme by
+    # Horner's rule on the power-series coefficients (the same polynomial),
+    # the dominance from u^2 per pair and sigma^2 + eps per segment.
     power = legendre_to_monomial(coef.transpose(1, 0, 2))  # (M+1, n_seg, C)
-    ta = (t if extrapolate == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0))[:, None]
-    A = power[-1].take(seg, axis=0)  # (pairs, C)
-    for m in range(power.shape[0] - 2, -1, -1):
-        A *= ta
-        A += power[m].take(seg, axis=0)
+    if support is not None:  # "trained": each segment's range, per pair
+        support = np.asarray(support, dtype=float)
+        support = (per_pair(support[:, 0]), per_pair(support[:, 1]))
+    ta = animeme_time(t, extrapolate, support)[..., None]
+    deg = power.shape[0] - 1
+    A = per_pair(power[deg]) * (ta if deg else np.ones_like(ta))  # (pairs, C) or (n_frames, n_seg, C)
+    for m in range(deg - 1, -1, -1):
+        A += per_pair(power[m])
+        if m:
+            A *= ta
     u = outside_distance(t)
-    D = dominance_of_distance((u * u)[:, None], (sigma * sigma + eps).take(seg, axis=0), tol)  # (pairs, C)
+    u *= u
+    D = dominance_of_distance(u[..., None], per_pair(sigma * sigma + eps), tol)
     A *= D
-    flat = ((frame * n_ch)[:, None] + np.arange(n_ch)).ravel()
-    num = np.bincount(flat, weights=A.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
+    if A.ndim == 3:
+        num, den = np.add.reduce(A, axis=1), np.add.reduce(D, axis=1)
+    else:
+        flat = ((frame * n_ch)[:, None] + np.arange(n_ch)).ravel()
+        num = np.bincount(flat, weights=A.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
+        if not normalize:
+            return num
+        den = np.bincount(flat, weights=D.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
     if not normalize:
         return num
-    den = np.bincount(flat, weights=D.ravel(), minlength=n_frames * n_ch).reshape(n_frames, n_ch)
     # every frame lies inside some segment (D = 1 there), so den >= 1
-    return num / np.maximum(den, 1e-300)
+    den = np.maximum(den, 1e-300, out=den)
+    return np.divide(num, den, out=num)

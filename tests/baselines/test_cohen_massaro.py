@@ -32,28 +32,31 @@ def _random_alignment(rng, n_segments=9):
     return Alignment(labels, np.r_[0.0, ends[:-1]], ends)
 
 
+def _cm_1993(alignment, frame_rate, n_frames, par, ch):
+    """Cohen & Massaro (1993) written out from the paper, independently of the module:
+    F(t) = sum_s D_s(t) T_s / sum_s D_s(t), D_s(t) = alpha exp(-theta |m_s - t|^c), theta
+    the left rate before the centre m_s and the right rate after it (plain exp, no log domain)."""
+    t = np.arange(n_frames) / frame_rate
+    num = np.zeros(n_frames)
+    den = np.zeros(n_frames)
+    for lab, s0, s1 in zip(alignment.labels, alignment.starts, alignment.ends):
+        i = PHONES.index(lab)
+        tau = 0.5 * (s0 + s1) - t
+        theta = np.where(tau > 0, par["theta_left"][i, ch], par["theta_right"][i, ch])
+        D = par["alpha"][i, ch] * np.exp(-theta * np.abs(tau) ** par["c"][i, ch])
+        num += D * par["target"][i, ch]
+        den += D
+    return num / den
+
+
 def _generated_corpus(n_utts=16, seed=0, frame_rate=100.0):
-    """A corpus synthesised by the Cohen–Massaro model itself with TRUE parameters."""
+    """A corpus synthesised from TRUE by the 1993 formula (:func:`_cm_1993`)."""
     rng = np.random.default_rng(seed)
     utts = []
     for k in range(n_utts):
         a = _random_alignment(rng)
         n = a.n_frames(frame_rate)
-        d = _Design(a, np.array([PHONES.index(lab) for lab in a.labels]), frame_rate, n)
-        y = np.stack(
-            [
-                cohen_massaro_trajectory(
-                    d,
-                    TRUE["target"][:, ch],
-                    np.log(TRUE["alpha"][:, ch]),
-                    TRUE["theta_left"][:, ch],
-                    TRUE["theta_right"][:, ch],
-                    TRUE["c"][:, ch],
-                )
-                for ch in range(2)
-            ],
-            axis=1,
-        )
+        y = np.stack([_cm_1993(a, frame_rate, n, TRUE, ch) for ch in range(2)], axis=1)
         utts.append(Utterance(a, y, frame_rate, ["x", "y"], name=f"u{k}"))
     return Corpus(utts, name="cm-generated")
 
@@ -211,3 +214,102 @@ def test_long_utterance_in_windowed_blocks_matches_the_dense_model(monkeypatch):
     assert len(long) > 60  # many more segments than one block sees
     err = np.abs(windowed - dense).max() / np.ptp(dense, axis=0).max()
     assert err < 1e-4, err
+
+
+def _with_parameters(par):
+    """A CohenMassaro holding the parameters ``par`` (fitted briefly, then overwritten)."""
+    model = CohenMassaro(max_nfev=2).fit(_generated_corpus(n_utts=2))
+    assert model.phones_ == PHONES
+    model.target_, model.alpha_ = par["target"].copy(), par["alpha"].copy()
+    model.theta_left_, model.theta_right_, model.c_ = (par[k].copy() for k in ("theta_left", "theta_right", "c"))
+    return model
+
+
+def test_predict_is_the_1993_formula():
+    # the weights are formed in the log domain, the smallest clipped at e^-100 of the largest:
+    # the plain formula agrees to rounding, at every frame of every utterance
+    model = _with_parameters(TRUE)
+    for u in _generated_corpus(n_utts=5, seed=11):
+        np.testing.assert_allclose(model.predict(u.alignment), u.trajectory, rtol=0, atol=1e-12)
+
+
+def test_far_frames_do_not_divide_zero_by_zero():
+    # 2 s after the last centre every dominance underflows to 0 in the plain formula (0/0);
+    # the model takes the ratio in the log domain
+    par = {k: v.copy() for k, v in TRUE.items()}
+    par["theta_right"][:] = 2000.0
+    par["theta_right"][PHONES.index("m")] = 1000.0  # falls slowest after its centre
+    model = _with_parameters(par)
+    a = Alignment(["aa", "m", "s"], [0.0, 0.1, 0.2], [0.1, 0.2, 5.0])
+    with np.errstate(all="ignore"):
+        plain = _cm_1993(a, 100.0, a.n_frames(100.0), par, 0)
+    assert np.isnan(plain).any()  # the plain formula fails there
+    out = model.predict(a)
+    assert np.isfinite(out).all()
+    centres = 0.5 * (a.starts + a.ends)
+    for f in np.flatnonzero(np.isnan(plain)):
+        for ch in range(2):
+            rows = [PHONES.index(lab) for lab in a.labels]
+            tau = centres - f / 100.0
+            theta = np.where(tau > 0, par["theta_left"][rows, ch], par["theta_right"][rows, ch])
+            log_d = np.log(par["alpha"][rows, ch]) - theta * np.abs(tau) ** par["c"][rows, ch]
+            w = np.exp(log_d - log_d.max())  # the same ratio, scaled by a common factor
+            assert out[f, ch] == pytest.approx(w @ par["target"][rows, ch] / w.sum(), abs=1e-12)
+
+
+def test_channels_evaluated_together_equal_one_at_a_time():
+    from baselines.cohen_massaro import normal_equations
+
+    corpus = _generated_corpus(n_utts=3, seed=6)
+    idx = {p: i for i, p in enumerate(PHONES)}
+    designs = [
+        _Design(u.alignment, np.array([idx[lab] for lab in u.alignment.labels]), 100.0, u.n_frames) for u in corpus
+    ]
+    X = np.random.default_rng(2).normal(0, 0.5, size=(3, 20))
+    ys = [np.stack([u.trajectory[:, 0], u.trajectory[:, 1], -u.trajectory[:, 0]]) for u in corpus]
+    cost, g, H = normal_equations(X, designs, ys, 4)
+    for i in range(3):
+        c1, g1, H1 = normal_equations(X[i], designs, [y[i] for y in ys], 4)
+        assert cost[i] == pytest.approx(c1, rel=1e-12)
+        np.testing.assert_allclose(g[i], g1, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(H[i], H1, rtol=1e-12, atol=1e-14)
+
+
+def test_levenberg_marquardt_runs_problems_in_lockstep_as_alone():
+    from baselines.cohen_massaro import levenberg_marquardt
+
+    t = np.linspace(0, 3, 40)
+    ys = np.stack([2.0 * np.exp(-1.3 * t) + 0.5, 0.7 * np.exp(-4.0 * t) - 0.2, 3.0 * np.exp(-0.2 * t)])
+
+    def one(x, y):
+        e = np.exp(-x[1] * t)
+        r, J = x[0] * e + x[2] - y, np.stack([e, -x[0] * t * e, np.ones_like(t)], axis=1)
+        return float(r @ r), J.T @ r, J.T @ J
+
+    def batched(X, rows):
+        out = [one(x, ys[i]) for x, i in zip(X, rows)]
+        return np.array([o[0] for o in out]), np.stack([o[1] for o in out]), np.stack([o[2] for o in out])
+
+    lo, hi = np.array([0.0, 0.0, -1.0]), np.array([10.0, 10.0, 10.0])
+    x0 = np.array([1.0, 0.5, 1.0])
+    X, cost, nfev = levenberg_marquardt(batched, np.tile(x0, (3, 1)), lo, hi, tol=1e-12)
+    for i in range(3):
+        xi, ci, ni = levenberg_marquardt(lambda x, i=i: one(x, ys[i]), x0, lo, hi, tol=1e-12)
+        np.testing.assert_array_equal(X[i], xi)
+        assert (cost[i], nfev[i]) == (ci, ni)
+    np.testing.assert_allclose(X, [[2.0, 1.3, 0.5], [0.7, 4.0, -0.2], [3.0, 0.2, 0.0]], atol=1e-6)
+
+
+def test_model_file_saved_before_the_fast_fit_still_loads():
+    """A model written by the per-channel fit of commit before issue 11's speed-up
+    (fitted on tiny's training split, max_nfev=5): same parameters, same predictions."""
+    from pathlib import Path
+
+    import dam
+
+    here = Path(__file__).parents[1] / "data" / "models"
+    m = dam.load(here / "cohen-massaro_before-issue11.dam")
+    assert type(m) is CohenMassaro and m.max_nfev == 5
+    train, test = dam.datasets.load("tiny").train_test_split(0.25, random_state=0)
+    u = test[0]
+    np.testing.assert_allclose(m.predict(u.alignment), np.load(here / "cohen-massaro_before-issue11.npy"), atol=1e-12)

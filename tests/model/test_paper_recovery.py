@@ -115,11 +115,13 @@ def test_edges_no_padding_and_true_model_reproduces_literal_data():
 
 
 @pytest.mark.parametrize("n_modes", [1, 2])
-def test_plain_sum_dam_recovers_literal_paper_data_held_out(n_modes):
+@pytest.mark.parametrize("extrapolate", ["polynomial", "trained"])  # "trained": dam-paper's, held beyond its range
+def test_plain_sum_dam_recovers_literal_paper_data_held_out(n_modes, extrapolate):
     train = make_literal_corpus(1, 40, n_modes)
     test = make_literal_corpus(2, 12, n_modes)
     model = DAM(
         normalize=False,
+        extrapolate=extrapolate,
         eps=EPS,
         dominance_tol=1e-9,
         ridge=1e-12,

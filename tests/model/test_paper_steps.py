@@ -12,6 +12,7 @@ from dam.model.dominance import dominance, dominance_dsigma, reach
 from dam.model.em import fit_em
 from dam.model.estep import Occurrences, design_matrix, fitted_values, normal_equations, pairs, solve_normal_equations
 from dam.model.mstep import gauss_newton_sigma, jacobian
+from dam.model import synthesis
 from dam.model.synthesis import concatenate
 
 
@@ -99,16 +100,21 @@ def test_eq2_plain_sum_and_weighted_average_by_hand():
 
 
 @pytest.mark.parametrize("normalize,extrapolate", [(False, "polynomial"), (True, "polynomial"), (True, "hold")])
-def test_eq2_with_truncation_matches_a_frame_by_frame_reference(normalize, extrapolate):
+@pytest.mark.parametrize("n_seg", [1, 2, 9])
+@pytest.mark.parametrize("pairs", ["windowed", "dense"])
+def test_eq2_with_truncation_matches_a_frame_by_frame_reference(normalize, extrapolate, n_seg, pairs, monkeypatch):
     # Eq. (1) and (2) written out frame by frame and segment by segment, with the
-    # monomial animemes of the paper: three channels, overlapping tails, truncation
-    rng = np.random.default_rng(7)
-    d = rng.uniform(0.04, 0.2, 9)
+    # monomial animemes of the paper: three channels, overlapping tails, truncation;
+    # both ways synthesis enumerates (frame, segment) pairs: within the dominance
+    # windows, and all of them (what it does for a few phones)
+    monkeypatch.setattr(synthesis, "DENSE_PAIRS", 0 if pairs == "windowed" else 10**9)
+    rng = np.random.default_rng(7 + n_seg)
+    d = rng.uniform(0.04, 0.2, n_seg)
     ends = np.cumsum(d)
     starts = ends - d
     fr, n = 100.0, int(np.ceil(ends[-1] * 100.0))
-    mono = rng.normal(size=(9, 5, 3))  # a^0 .. a^4 per segment and channel
-    sigma = rng.uniform(0.05, 0.9, (9, 3))
+    mono = rng.normal(size=(n_seg, 5, 3))  # a^0 .. a^4 per segment and channel
+    sigma = rng.uniform(0.05, 0.9, (n_seg, 3))
     eps, tol = 1e-8, 1e-3
     coef = np.stack([animeme.monomial_to_legendre(m) for m in mono])
     got = concatenate(starts, ends, coef, sigma, fr, n, normalize=normalize, extrapolate=extrapolate, eps=eps, tol=tol)
@@ -116,7 +122,7 @@ def test_eq2_with_truncation_matches_a_frame_by_frame_reference(normalize, extra
     for i in range(n):
         for c in range(3):
             num = den = 0.0
-            for j in range(9):
+            for j in range(n_seg):
                 t = (i / fr - starts[j]) / d[j]
                 u = max(-t, 0.0, t - 1.0)
                 D = np.exp(-u * u / (sigma[j, c] ** 2 + eps))

@@ -83,13 +83,15 @@ def _tables(model):
     from dam.model.animeme import boundary_derivatives, legendre_to_monomial
 
     phones = list(model.phone_modes_)
+    support = model._support_of(np.arange(len(model.mode_phone_)))
     meta.update(
         {
             "phones": phones,
             "first": [int(model.phone_modes_[p][0]) for p in phones],
             "count": [int(model.phone_modes_[p][1]) for p in phones],
             "normalize": bool(model.normalize),
-            "extrapolate": str(model.extrapolate),
+            # "trained" without a learned range (given parameters) is the polynomial itself
+            "extrapolate": "polynomial" if model.extrapolate == "trained" and support is None else model.extrapolate,
             "eps": float(model.eps),
             "tol": float(model.dominance_tol),
             "w_c": float(model.w_c),
@@ -106,6 +108,8 @@ def _tables(model):
         "edges": boundary_derivatives(model.coef_, order=2),
         "channel_scale": np.asarray(model.channel_scale_, dtype=float),
     }
+    if support is not None:  # extrapolate="trained": where training evaluated each animeme
+        arrays["support"] = np.asarray(support, dtype=float)
     return meta, arrays
 
 

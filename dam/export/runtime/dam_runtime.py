@@ -229,7 +229,15 @@ class Model:
         t = (frame / fr - starts[seg]) / dur[seg]
         # (M+1, n_seg, C), contiguous: take() on a transposed view is several times slower
         power = np.ascontiguousarray(self.power[glob].transpose(1, 0, 2))
-        ta = (t if self.meta["extrapolate"] == "polynomial" else np.minimum(np.maximum(t, 0.0), 1.0))[:, None]
+        extrapolate = self.meta["extrapolate"]
+        if extrapolate == "polynomial":
+            ta = t
+        elif extrapolate == "trained":  # the polynomial where training evaluated it, held beyond
+            sup = self.arrays["support"][glob]
+            ta = np.minimum(np.maximum(t, sup[:, 0].take(seg)), sup[:, 1].take(seg))
+        else:  # "hold"
+            ta = np.minimum(np.maximum(t, 0.0), 1.0)
+        ta = ta[:, None]
         A = power[-1].take(seg, axis=0)
         for m in range(power.shape[0] - 2, -1, -1):  # Horner's rule
             A *= ta

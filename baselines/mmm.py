@@ -129,13 +129,19 @@ def solve_banded_spd(ab: np.ndarray, b: np.ndarray) -> np.ndarray:
     frames in Python and is several times slower, but needs nothing beyond numpy.
     """
     try:
-        from scipy.linalg import solveh_banded
+        # LAPACK's banded Cholesky itself: scipy.linalg.solveh_banded's checks cost
+        # several times the solve of a phrase (a per-utterance call solves one per channel)
+        from scipy.linalg.lapack import dpbsv
     except ImportError:
         return banded_cholesky_solve(ab, b)
     ab, b = np.asarray(ab, dtype=float), np.asarray(b, dtype=float)
     flat_ab = ab.reshape(-1, *ab.shape[-2:])
     flat_b = b.reshape(-1, b.shape[-1])
-    out = np.stack([solveh_banded(a, v, lower=True, check_finite=False) for a, v in zip(flat_ab, flat_b)])
+    out = np.empty(flat_b.shape)
+    for i in range(len(flat_b)):
+        _, out[i], info = dpbsv(flat_ab[i], flat_b[i], lower=1)
+        if info > 0:
+            raise np.linalg.LinAlgError(f"banded matrix is not positive definite (leading minor {info})")
     return out.reshape(b.shape)
 
 

@@ -13,8 +13,8 @@ a bundled corpus. Reported, with medians and the machine:
   phone-mean in the same run: per utterance (one ``predict`` call per
   utterance of 20-60 phones, what a user does), in one batch (one long
   alignment) and one phone per call; the paper: 0.8 ms per phone. Timings
-  are the best of several repeats (as ``timeit`` reports them: the machine is
-  shared, and the minimum is the run least disturbed by other work);
+  are medians of several runs, in wall time and in the process's CPU time (the
+  machine is shared: wall time also counts waiting for a core);
 * the E-step's normal equations built utterance by utterance (what the DAM
   uses) against a scipy sparse ``X.T @ X``;
 * references measured in the same run: a 200x2000 by 2000x200 numpy matmul,
@@ -56,6 +56,7 @@ from dam.model.estimator import DAM  # noqa: E402
 
 PHONES = [f"p{i:02d}" for i in range(40)]
 N_CH = 4
+REPEAT = 9  # runs per synthesis figure (the median is reported)
 
 
 def corpus_of(minutes: float, seed: int = 0):
@@ -122,6 +123,12 @@ def main(argv=None):
             times.append(time.perf_counter() - t0)
         m = models[-1]
         t_pm = median_time(lambda: PhoneMean().fit(corpus), repeat=3)
+        # Cohen-Massaro on the same corpus (issue 11: its fit no slower than the DAM's)
+        cm_times = []
+        for _ in range(reps):
+            t0 = time.perf_counter()
+            cm = CohenMassaro().fit(corpus)
+            cm_times.append(time.perf_counter() - t0)
         row = {
             "minutes": corpus.duration / 60,
             "frames": corpus.n_frames,
@@ -133,11 +140,14 @@ def main(argv=None):
             "runs": reps,
             "phone_mean_fit_seconds": t_pm,
             "ratio_per_channel_to_matmul": float(np.median(times)) / N_CH / t_matmul,
+            "cohen_massaro_fit_seconds_per_channel": float(np.median(cm_times)) / N_CH,
+            "cohen_massaro_evaluations_per_channel": cm.n_fev_.tolist(),
         }
         res["training"].append(row)
         print(
             f"{minutes:>5} min: {row['fit_seconds_per_channel']:.2f} s per channel "
-            f"({row['modes']} modes, EM iterations {row['em_iterations_per_channel']})",
+            f"({row['modes']} modes, EM iterations {row['em_iterations_per_channel']}); Cohen-Massaro "
+            f"{row['cohen_massaro_fit_seconds_per_channel']:.2f} s per channel",
             file=sys.stderr,
         )
         if fitted is None or minutes == 2:
@@ -160,22 +170,15 @@ def main(argv=None):
     print(f"wrote {out / 'dam.json'} and {out / 'dam.md'}", file=sys.stderr)
 
 
-def best_time(fn, repeat: int = 7, clock=time.perf_counter) -> float:
-    """The best of ``repeat`` runs, in seconds (``timeit``'s convention on a shared machine).
-
-    ``clock=time.process_time`` counts the CPU time of this process only: on a
-    machine shared with other jobs, wall time also counts the time the process
-    waited for a core."""
-    times = []
-    for _ in range(repeat):
-        t0 = clock()
-        fn()
-        times.append(clock() - t0)
-    return min(times)
-
-
 def _synthesis(dam_model) -> dict:
-    """Per-utterance, batch and one-phone-per-call microseconds per phone, four models, one run."""
+    """Per-utterance, batch and one-phone-per-call microseconds per phone, four models, one run.
+
+    Medians of ``REPEAT`` runs (each run calls ``predict`` on all 60 utterances, the
+    2000-phone alignment once, or all 200 one-phone alignments), in wall time and in
+    this process's CPU time. For the DAM also ``synthesize`` alone (mode selection
+    plus Eq. 2, the issue's measure: ``predict`` adds the input checks every model
+    shares) and selection alone.
+    """
     import warnings
 
     train = corpus_of(1, seed=3)
@@ -192,36 +195,39 @@ def _synthesis(dam_model) -> dict:
     n_utt_phones = sum(len(a) for a in utts)
     long = random_alignment(rng, PHONES, n_segments=2000)
     singles = [random_alignment(rng, PHONES, n_segments=1) for _ in range(200)]
-    n_single = sum(len(a) for a in singles)
+    cpu = time.process_time
+
+    def figures(per_utt, batch, one) -> dict:
+        """Wall and CPU medians of the three workloads, µs per phone (per call for one phone)."""
+        out = {}
+        for clock, prefix in ((time.perf_counter, ""), (cpu, "cpu_")):
+            out[prefix + "per_utterance_us_per_phone"] = (
+                median_time(lambda: [per_utt(a) for a in utts], REPEAT, clock=clock) / n_utt_phones * 1e6
+            )
+            if batch is not None:
+                out[prefix + "batch_us_per_phone"] = (
+                    median_time(lambda: batch(long), REPEAT, clock=clock) / len(long) * 1e6
+                )
+            out[prefix + "one_phone_us_per_call"] = (
+                median_time(lambda: [one(a) for a in singles], REPEAT, clock=clock) / len(singles) * 1e6
+            )
+        return out
+
     rows = {}
     for name, m in models.items():
-        t_utt = best_time(lambda: [m.predict(a) for a in utts], repeat=5)
-        t_batch = best_time(lambda: m.predict(long), repeat=5)
-        t_one = best_time(lambda: [m.predict(a) for a in singles], repeat=5)
-        cpu = time.process_time
-        rows[name] = {
-            "per_utterance_us_per_phone": t_utt / n_utt_phones * 1e6,
-            "batch_us_per_phone": t_batch / len(long) * 1e6,
-            "one_phone_us_per_call": t_one / len(singles) * 1e6,
-            "cpu_per_utterance_us_per_phone": best_time(lambda: [m.predict(a) for a in utts], 5, cpu)
-            / n_utt_phones
-            * 1e6,
-            "cpu_batch_us_per_phone": best_time(lambda: m.predict(long), 5, cpu) / len(long) * 1e6,
-            "cpu_one_phone_us_per_call": best_time(lambda: [m.predict(a) for a in singles], 5, cpu)
-            / len(singles)
-            * 1e6,
-        }
+        rows[name] = figures(m.predict, m.predict, m.predict)
         print(
             f"{name:>14}: {rows[name]['per_utterance_us_per_phone']:.1f} us/phone per utterance, "
             f"{rows[name]['batch_us_per_phone']:.1f} batch, {rows[name]['one_phone_us_per_call']:.0f} us "
             "per one-phone call",
             file=sys.stderr,
         )
-    # what the DAM spends per utterance on mode selection alone (the rest is Eq. 2)
-    t_sel = best_time(lambda: [dam_model.select_modes(a) for a in utts], repeat=5)
+    # the DAM's mode selection plus Eq. (2) without predict's input checks, and selection alone
+    synth = figures(dam_model.synthesize, dam_model.synthesize, dam_model.synthesize)
+    select = figures(dam_model.select_modes, None, dam_model.select_modes)
     # the machine's state: one small numpy call (a few tenths of a microsecond when idle)
     x = np.zeros(8)
-    t_call = best_time(lambda: [np.add(x, x) for _ in range(1000)], repeat=5) / 1000
+    t_call = median_time(lambda: [np.add(x, x) for _ in range(1000)], REPEAT) / 1000
     return {
         "model": repr(dam_model),
         "model_modes": len(dam_model.mode_phone_),
@@ -229,8 +235,11 @@ def _synthesis(dam_model) -> dict:
         "utterance_phones": [20, 60],
         "segments_per_utterance_mean": n_utt_phones / len(utts),
         "batch_phones": len(long),
-        "one_phone_segments_per_call_mean": n_single / len(singles),
-        "dam_selection_us_per_phone": t_sel / n_utt_phones * 1e6,
+        "one_phone_calls": len(singles),
+        "repeats": REPEAT,
+        "dam_synthesize": synth,
+        "dam_selection": select,
+        "dam_selection_us_per_phone": select["per_utterance_us_per_phone"],
         "numpy_small_call_us": t_call * 1e6,
         "load_average": os.getloadavg(),
         "models": rows,
@@ -255,9 +264,14 @@ def write_readme_block(results: Path, readme: Path) -> None:
 
 def _synthesis_lines(r) -> list:
     s, m = r["synthesis"], r["machine"]
+    if "repeats" not in s:  # results of an older run (best of 5)
+        raise SystemExit("dam.json predates median synthesis figures: re-run benchmarks/bench_dam.py")
     lines = [
-        f"Synthesis, {m['date']} ({m['cpu']}, {m['cores']} cores, shared; best of 5; model `{s['model']}` "
-        f"with {s['model_modes']} modes; the paper: 800 µs per phone):",
+        f"Synthesis, {m['date']} ({m['cpu']}, {m['cores']} cores, shared; median of {s['repeats']} runs; "
+        f"model `{s['model']}` with {s['model_modes']} modes; the paper: 800 µs per phone). "
+        f"Per utterance: one `predict` call for each of {s['utterances']} utterances of 20-60 phones; "
+        f"batch: one call on {s['batch_phones']} phones; one phone: one call for each of "
+        f"{s['one_phone_calls']} one-phone alignments.",
         "",
         "Wall time, and in parentheses the CPU time of the process (on a shared machine the wall time "
         "also counts waiting for a core):",
@@ -265,34 +279,48 @@ def _synthesis_lines(r) -> list:
         "| model | per utterance (20-60 phones), µs/phone | batch of 2000, µs/phone | one-phone call, µs |",
         "|---|---:|---:|---:|",
     ]
-    for name, row in s["models"].items():
-        cpu = lambda k, f: f" ({row[k]:{f}})" if k in row else ""
-        lines.append(
-            f"| {name} | {row['per_utterance_us_per_phone']:.1f}{cpu('cpu_per_utterance_us_per_phone', '.1f')} | "
-            f"{row['batch_us_per_phone']:.1f}{cpu('cpu_batch_us_per_phone', '.1f')} | "
-            f"{row['one_phone_us_per_call']:.0f}{cpu('cpu_one_phone_us_per_call', '.0f')} |"
-        )
-    lines += ["", f"DAM mode selection alone: {s['dam_selection_us_per_phone']:.1f} µs per phone per utterance."]
-    if "numpy_small_call_us" in s:
-        lines += [
-            "",
-            f"State of the machine during this run: load average {s['load_average'][0]:.1f} on "
-            f"{m['cores']} cores; one small numpy call took {s['numpy_small_call_us']:.2f} µs "
-            "(0.3-0.5 µs on an idle machine), the reference matmul "
-            f"{r['reference_matmul_seconds'] * 1e3:.1f} ms (5.7 ms idle).",
-        ]
+
+    def row(name, f) -> str:
+        cells = []
+        for k, fmt in (
+            ("per_utterance_us_per_phone", ".1f"),
+            ("batch_us_per_phone", ".1f"),
+            ("one_phone_us_per_call", ".0f"),
+        ):
+            cells.append(f"{f[k]:{fmt}} ({f['cpu_' + k]:{fmt}})" if k in f else "")
+        return f"| {name} | " + " | ".join(cells) + " |"
+
+    for name, f in s["models"].items():
+        lines.append(row(name, f))
+    lines.append(row("dam: selection + Eq. (2) (`synthesize`)", s["dam_synthesize"]))
+    lines.append(row("dam: selection alone (`select_modes`)", s["dam_selection"]))
+    lines += [
+        "",
+        f"Targets (issue 11): selection plus Eq. (2) at most {s['target_per_utterance_us_per_phone']:.0f} µs "
+        f"per phone per utterance and {s['target_one_phone_us']:.0f} µs for a one-phone call. "
+        "`predict` adds the input checks every model shares (labels known, output size, finite output).",
+        "",
+        f"State of the machine during this run: load average {s['load_average'][0]:.1f} on "
+        f"{m['cores']} cores; one small numpy call took {s['numpy_small_call_us']:.2f} µs "
+        "(0.3-0.5 µs on an idle machine), the reference matmul "
+        f"{r['reference_matmul_seconds'] * 1e3:.1f} ms.",
+    ]
     return lines
 
 
 def _training_lines(r) -> list:
     lines = [
-        "DAM training (synthetic corpora, 4 channels; the paper: 50-60 min per control for 10 min):",
+        f"Training, {r.get('training_from', r['machine']['date'])} (synthetic corpora, 4 channels, median "
+        "seconds per channel; the paper: 50-60 min per control for 10 min; Cohen-Massaro in the same run):",
         "",
-        "| minutes of speech | s per channel |",
-        "|---:|---:|",
+        "| minutes of speech | DAM s per channel | Cohen-Massaro s per channel |",
+        "|---:|---:|---:|",
     ]
     for t in r["training"]:
-        lines.append(f"| {t['minutes']:.1f} | {t['fit_seconds_per_channel']:.2f} |")
+        cm = t.get("cohen_massaro_fit_seconds_per_channel")
+        lines.append(
+            f"| {t['minutes']:.1f} | {t['fit_seconds_per_channel']:.2f} | {'' if cm is None else f'{cm:.2f}'} |"
+        )
     return lines
 
 
@@ -347,14 +375,17 @@ def _markdown(r) -> str:
             if "training_from" in r
             else []
         ),
-        "| minutes | frames | modes | s per channel (median) | EM iterations per channel | runs | phone-mean fit s | per channel / matmul |",
-        "|---:|---:|---:|---:|---|---:|---:|---:|",
+        "| minutes | frames | modes | DAM s per channel (median) | EM iterations per channel | runs | "
+        "Cohen-Massaro s per channel | CM / DAM | phone-mean fit s | DAM per channel / matmul |",
+        "|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|",
     ]
     for t in r["training"]:
+        cm = t.get("cohen_massaro_fit_seconds_per_channel")
         lines.append(
             f"| {t['minutes']:.1f} | {t['frames']} | {t['modes']} | {t['fit_seconds_per_channel']:.2f} | "
-            f"{t['em_iterations_per_channel']} | {t['runs']} | {t['phone_mean_fit_seconds']:.3f} | "
-            f"{t['ratio_per_channel_to_matmul']:.0f} |"
+            f"{t['em_iterations_per_channel']} | {t['runs']} | "
+            + (f"{cm:.2f} | {cm / t['fit_seconds_per_channel']:.2f} | " if cm is not None else "| | ")
+            + f"{t['phone_mean_fit_seconds']:.3f} | {t['ratio_per_channel_to_matmul']:.0f} |"
         )
     if "training_peak_memory_mb" in r:
         lines += [

@@ -45,6 +45,7 @@ VARIANTS = [
     ("dam plain sum", "dam", {"normalize": False}),
     ("dam-paper", "dam-paper", {}),
     ("dam-paper, modes by context alone (w_s=0)", "dam-paper", {"w_s": 0.0}),
+    ("dam-paper, quartic on the whole time line", "dam-paper", {"extrapolate": "polynomial"}),
     ("dam-m0 plain sum, modes by context alone (w_s=0)", "dam-m0", {"normalize": False, "w_s": 0.0}),
     ("dam-m0 plain sum", "dam-m0", {"normalize": False}),
     ("dam-m0 single-mode", "dam-m0", {"modes": "single"}),

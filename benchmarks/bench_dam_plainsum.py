@@ -17,6 +17,9 @@ held-out RMSE per channel to ``benchmarks/results/dam_plainsum.json`` and
 * ``dam-paper, one mode per phone``: no mode choice at all;
 * ``dam-paper, hold``: the animeme held at its edge value outside [0, 1]
   instead of the quartic extrapolated over the dominance tails;
+* ``dam-paper, quartic on the whole time line``: the quartic also where
+  training never evaluated it (``dam-paper`` holds it there since issue 11:
+  ``extrapolate="trained"``);
 * the weighted-average ``dam`` and ``dam-m0`` rows, for comparison.
 
     python benchmarks/bench_dam_plainsum.py [--channels JA LP TTY] [--variants LABEL ...] [--readme]
@@ -53,6 +56,7 @@ VARIANTS = [
     ("dam-paper, fitted with the modes synthesis selects", "dam-paper", {}),
     ("dam-paper, one mode per phone", "dam-paper", {"modes": "single"}),
     ("dam-paper, hold", "dam-paper", {"extrapolate": "hold"}),
+    ("dam-paper, quartic on the whole time line", "dam-paper", {"extrapolate": "polynomial"}),
     ("dam-paper, modes chosen by context alone (w_s = 0)", "dam-paper", {"w_s": 0.0}),
     ("dam-m0 plain sum", "dam-m0", {"normalize": False}),
     ("dam (weighted average), fitted with the clustering's modes", "dam", {"fit_modes": "clustered"}),
@@ -158,7 +162,14 @@ def write_markdown(res: dict, out: Path) -> None:
     lines = [
         "# The plain-sum Eq. (2) on the bundled `vtl` corpus",
         "",
-        f"Channels {', '.join(chans)}; {res['machine']['date']}. RMSE over the channels. "
+        f"Channels {', '.join(chans)}; {res['machine']['date']}"
+        + (
+            f" (rows merged from the runs of {' and '.join(res['merged_runs'])}; *fit s* is each row's own run "
+            "on a shared machine)"
+            if "merged_runs" in res
+            else ""
+        )
+        + ". RMSE over the channels. "
         "*fit-time*: the EM's objective (training modes from clustering); *training*: the training "
         "utterances through `predict` (modes chosen by the search, as on held-out data).",
         "",

@@ -698,9 +698,8 @@ def compare(
 #: The full demo's channels (``dam demo --full``): jaw, lips, tongue body and tip.
 DEMO_CHANNELS = {"vtl": ("JA", "LP", "LD", "TCX", "TCY", "TTY")}
 #: The quick demo (``dam demo``, under a minute on two cores): jaw angle, lip distance and tongue-tip
-#: height, all the training data, and the classical models but the two slowest to fit: the 1993
-#: Cohen-Massaro model (its per-channel Levenberg-Marquardt fit alone takes longer than the rest
-#: together) and the linguistic decision tree; ``dam demo --full`` has them.
+#: height, all the training data, and the classical models but two: the 1993 Cohen-Massaro model
+#: and the linguistic decision tree, which ``dam demo --full`` adds.
 QUICK_DEMO = {
     "vtl": {
         "channels": ("JA", "LD", "TTY"),

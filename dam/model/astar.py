@@ -115,8 +115,8 @@ def mode_nll(stats: dict, phone: str, left: str, right: str, n_modes: int, alpha
     if tri is not None and sum(tri) > 0:
         return -np.log(_smoothed(tri, alpha)), "trigram"
     seen = [c for c in (st["left"].get(left), st["right"].get(right)) if c is not None and sum(c) > 0]
-    if seen:
-        return -np.log(np.mean([_smoothed(c, alpha) for c in seen], axis=0)), "bigram"
+    if seen:  # (sum / len: np.mean's overhead is most of a one-phone call's selection)
+        return -np.log(sum(_smoothed(c, alpha) for c in seen) / len(seen)), "bigram"
     return -np.log(_smoothed(st["unigram"], alpha)), "unigram"
 
 
@@ -298,28 +298,34 @@ def free_path(nodes: np.ndarray, edges: np.ndarray, free=None) -> np.ndarray:
     idx = np.flatnonzero(free)
     if idx.size == 0:
         return path
-    cut = np.flatnonzero(np.diff(idx) != 1)
+    cut = (np.diff(idx) != 1).nonzero()[0]
     first = idx[np.concatenate(([0], cut + 1))]
     last = idx[np.concatenate((cut, [idx.size - 1]))]
+    # longest block first: the blocks still running at step k are the first n_run[k] (slices, not gathers)
+    order = np.argsort(first - last, kind="stable")
+    first, last = first[order], last[order]
     L = last - first + 1
+    n_max = int(L[0])
+    n_run = np.searchsorted(-L, -np.arange(n_max), side="left").tolist()  # blocks with L > k
     acc = nodes[first]  # (n_blocks, G): fancy indexing copies
     before = first > 0
     acc[before] += edges[first[before] - 1, path[first[before] - 1], :]
-    n_max = int(L.max())
     back = []
     for k in range(1, n_max):
-        act = np.flatnonzero(L > k)
-        j = first[act] + k
-        tot = acc[act][:, :, None] + edges[j - 1]  # (n_act, G_prev, G)
-        back.append((act, tot.argmin(axis=1)))
-        acc[act] = tot.min(axis=1) + nodes[j]  # the value at the argmin, without gathering it
+        n = n_run[k]
+        j = first[:n] + k
+        tot = acc[:n, :, None] + edges[j - 1]  # (n, G_prev, G)
+        back.append(tot.argmin(axis=1))
+        acc[:n] = tot.min(axis=1) + nodes[j]  # the value at the argmin, without gathering it
     after = last + 1 < J
     acc[after] += edges[last[after], :, path[last[after] + 1]]
     path[last] = acc.argmin(axis=1)
+    rows = np.arange(len(first))
     for k in range(n_max - 1, 0, -1):
-        act, arg = back[k - 1]
-        j = first[act] + k
-        path[j - 1] = arg[np.arange(act.size), path[j]]
+        arg = back[k - 1]
+        n = len(arg)
+        j = first[:n] + k
+        path[j - 1] = arg[rows[:n], path[j]]
     return path
 
 

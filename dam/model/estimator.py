@@ -27,7 +27,7 @@ import numpy as np
 from dam.base import Interval, Options, Synthesizer
 from dam.corpus.data import Alignment, Corpus
 from dam.model import animeme as _animeme
-from dam.model.astar import ModeGraph, astar, free_path, smoothness_costs
+from dam.model.astar import BOUNDARY, ModeGraph, astar, free_path, mode_nll, smoothness_costs
 from dam.model.dominance import dominance
 from dam.model.synthesis import concatenate
 from dam.modelfile import StateArray, StateNames, StateRanges
@@ -510,10 +510,14 @@ class DAM(Synthesizer):
         free = count > 1
         if not free.any():  # nothing to choose
             return first, first, np.zeros((len(pid), 1))
+        if len(pid) == 1:  # one phone (e.g. streaming): its cheapest E_c, read from the counts directly
+            nll, _ = mode_nll(
+                self.context_counts_, labels[0], BOUNDARY, BOUNDARY, int(count[0]), self.context_smoothing
+            )
+            nodes = _weighted(self.w_c, nll[None, :])
+            return first + np.argmin(nodes[0]), first, nodes
         nll, _ = graph.node_costs(pid, count, float(self.context_smoothing))
         nodes = _weighted(self.w_c, nll)
-        if len(pid) == 1:  # one phone (e.g. streaming): its cheapest E_c
-            return first + np.argmin(nodes[0]), first, nodes
         # edges only where a path can differ: at the joints of multi-mode segments
         joints = np.flatnonzero(free[:-1] | free[1:])
         edges = np.zeros((len(pid) - 1, nodes.shape[1], nodes.shape[1]))

@@ -134,30 +134,39 @@ def concatenate(
         # fewer numpy steps than windowing. Pairs outside the windows have
         # dominance below tol, which truncation zeroes: the same sum.
         t = (np.arange(n_frames)[:, None] / frame_rate - starts) / (np.asarray(ends, dtype=float) - starts)
+        # one segment holding every frame (a one-phone call): its dominance is 1 at
+        # every frame, so Eq. (2), plain sum and average alike, is its animeme
+        lone = n_seg == 1 and t[0, 0] >= 0.0 and t[-1, 0] <= 1.0
 
         def per_pair(x):  # (n_seg, ...) broadcasts against (n_frames, n_seg, ...)
             return x
 
     else:
+        lone = False
         seg, frame, t = segment_windows(starts, ends, sigma.max(axis=1), frame_rate, n_frames, eps, tol)
 
         def per_pair(x):  # x.take(seg, axis=0): much faster than x[seg] on a 2-D x
             return x.take(seg, axis=0)
 
-    # Per segment first (small arrays), then per pair: the animeme by
-    # Horner's rule on the power-series coefficients (the same polynomial),
-    # the dominance from u^2 per pair and sigma^2 + eps per segment.
+    # Per segment first (small arrays), then per pair: the animeme from the
+    # power-series coefficients a^0 .. a^M (the same polynomial), the dominance
+    # from u^2 per pair and sigma^2 + eps per segment.
     power = legendre_to_monomial(coef.transpose(1, 0, 2))  # (M+1, n_seg, C)
     if support is not None:  # "trained": each segment's range, per pair
         support = np.asarray(support, dtype=float)
         support = (per_pair(support[:, 0]), per_pair(support[:, 1]))
     ta = animeme_time(t, extrapolate, support)[..., None]
     deg = power.shape[0] - 1
-    A = per_pair(power[deg]) * (ta if deg else np.ones_like(ta))  # (pairs, C) or (n_frames, n_seg, C)
-    for m in range(deg - 1, -1, -1):
-        A += per_pair(power[m])
-        if m:
-            A *= ta
+    if t.ndim == 2:  # every pair: sum_m a^m t^m as one product per pair (fewer steps than Horner's)
+        A = np.matmul(ta[..., None] ** np.arange(deg + 1), power.transpose(1, 0, 2))[:, :, 0]
+    else:  # Horner's rule, in place on the (pairs, C) arrays
+        A = per_pair(power[deg]) * (ta if deg else np.ones_like(ta))
+        for m in range(deg - 1, -1, -1):
+            A += per_pair(power[m])
+            if m:
+                A *= ta
+    if lone:
+        return A[:, 0]
     u = outside_distance(t)
     u *= u
     D = dominance_of_distance(u[..., None], per_pair(sigma * sigma + eps), tol)

@@ -233,6 +233,19 @@ def test_predict_is_the_1993_formula():
         np.testing.assert_allclose(model.predict(u.alignment), u.trajectory, rtol=0, atol=1e-12)
 
 
+def test_one_phone_is_its_target_throughout():
+    # one segment, or a pause cut in two (one segment once merged): the weighted average of one target
+    model = _with_parameters(TRUE)
+    for a in (Alignment(["m"], [0.0], [0.37]), Alignment(["sil", "sil"], [0.0, 0.2], [0.2, 0.5])):
+        row = PHONES.index(a.labels[0])
+        out = model.predict(a)
+        assert out.shape == (a.n_frames(100.0), 2)
+        np.testing.assert_array_equal(out, np.broadcast_to(TRUE["target"][row], out.shape))
+        np.testing.assert_allclose(
+            _cm_1993(Alignment(a.labels[:1], [0.0], [a.duration]), 100.0, len(out), TRUE, 1), out[:, 1]
+        )
+
+
 def test_far_frames_do_not_divide_zero_by_zero():
     # 2 s after the last centre every dominance underflows to 0 in the plain formula (0/0);
     # the model takes the ratio in the log domain
@@ -257,8 +270,12 @@ def test_far_frames_do_not_divide_zero_by_zero():
             assert out[f, ch] == pytest.approx(w @ par["target"][rows, ch] / w.sum(), abs=1e-12)
 
 
-def test_channels_evaluated_together_equal_one_at_a_time():
+@pytest.mark.parametrize("work_size", [1, 1 << 17])  # one channel per pass, or all three at once
+def test_channels_evaluated_together_equal_one_at_a_time(monkeypatch, work_size):
+    import baselines.cohen_massaro as cm
     from baselines.cohen_massaro import normal_equations
+
+    monkeypatch.setattr(cm, "WORK_SIZE", work_size)
 
     corpus = _generated_corpus(n_utts=3, seed=6)
     idx = {p: i for i, p in enumerate(PHONES)}
@@ -292,7 +309,10 @@ def test_levenberg_marquardt_runs_problems_in_lockstep_as_alone():
 
     lo, hi = np.array([0.0, 0.0, -1.0]), np.array([10.0, 10.0, 10.0])
     x0 = np.array([1.0, 0.5, 1.0])
-    X, cost, nfev = levenberg_marquardt(batched, np.tile(x0, (3, 1)), lo, hi, tol=1e-12)
+    stops = []
+    X, cost, nfev = levenberg_marquardt(batched, np.tile(x0, (3, 1)), lo, hi, tol=1e-12, on_stop=stops.append)
+    assert sorted(stops) == [0, 1, 2]  # each problem reported once, when it stops
+    assert [int(nfev[i]) for i in stops] == sorted(int(v) for v in nfev)
     for i in range(3):
         xi, ci, ni = levenberg_marquardt(lambda x, i=i: one(x, ys[i]), x0, lo, hi, tol=1e-12)
         np.testing.assert_array_equal(X[i], xi)

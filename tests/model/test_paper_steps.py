@@ -7,12 +7,11 @@ import pytest
 
 from dam.base import ConvergenceWarning
 from dam.corpus.data import Alignment, Corpus, Utterance
-from dam.model import animeme
+from dam.model import animeme, synthesis
 from dam.model.dominance import dominance, dominance_dsigma, reach
 from dam.model.em import fit_em
 from dam.model.estep import Occurrences, design_matrix, fitted_values, normal_equations, pairs, solve_normal_equations
 from dam.model.mstep import gauss_newton_sigma, jacobian
-from dam.model import synthesis
 from dam.model.synthesis import concatenate
 
 

@@ -298,7 +298,7 @@ def _synthesis_lines(r) -> list:
         "",
         f"Targets (issue 11): selection plus Eq. (2) at most {s['target_per_utterance_us_per_phone']:.0f} µs "
         f"per phone per utterance and {s['target_one_phone_us']:.0f} µs for a one-phone call. "
-        "`predict` adds the input checks every model shares (labels known, output size, finite output).",
+        "`predict` adds what every model's `predict` checks (the input's type, the output's size, shape and finiteness).",
         "",
         f"State of the machine during this run: load average {s['load_average'][0]:.1f} on "
         f"{m['cores']} cores; one small numpy call took {s['numpy_small_call_us']:.2f} µs "

@@ -231,19 +231,28 @@ def render_taylor() -> str:
     return "\n".join(lines) + "\n"
 
 
-def render_audio_models() -> str:
-    """Audio- beside phone-driven rows on vtl, from results/audio_models.json (bench_audio_models.py)."""
+def _bench_module(name: str):
+    """``benchmarks/<name>.py`` as a module (its renderer is the one its .md is written with)."""
     import importlib.util
 
-    path = ROOT / "benchmarks" / "bench_audio_models.py"
-    spec = importlib.util.spec_from_file_location("bench_audio_models", path)
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     sys.path.insert(0, str(ROOT / "benchmarks"))  # for its _machine import
     try:
         spec.loader.exec_module(mod)
     finally:
         sys.path.remove(str(ROOT / "benchmarks"))
-    return mod.markdown(_load("audio_models.json"))
+    return mod
+
+
+def render_audio_models() -> str:
+    """Audio- beside phone-driven rows on vtl, from results/audio_models.json (bench_audio_models.py)."""
+    return _bench_module("bench_audio_models").markdown(_load("audio_models.json"))
+
+
+def render_short_segments() -> str:
+    """Very short phones in every context, from results/short_segments.json (bench_short_segments.py)."""
+    return _bench_module("bench_short_segments").summary(_load("short_segments.json"))
 
 
 BLOCKS = {
@@ -253,6 +262,7 @@ BLOCKS = {
     "hmm-dv": render_hmm_dv,
     "taylor": render_taylor,
     "audio-models": render_audio_models,
+    "short-segments": render_short_segments,
 }
 
 

@@ -10,6 +10,7 @@ import inspect
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -78,7 +79,8 @@ def test_top_level_names_have_runnable_examples(name):
 @pytest.mark.parametrize("qualname", sorted(_public_objects()))
 def test_docstring_examples_run(qualname, tmp_path, monkeypatch):
     obj = _public_objects()[qualname]
-    monkeypatch.chdir(tmp_path)  # examples that write files write here
+    monkeypatch.chdir(tmp_path)  # examples that write files write here,
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # and so do those that make a tempfile.mkdtemp()
     finder = doctest.DocTestFinder(recurse=False)
     module = inspect.getmodule(obj)
     # as doctest runs a module's examples: in the module's namespace

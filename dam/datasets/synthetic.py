@@ -25,7 +25,7 @@ import numpy as np
 
 from dam.corpus.data import Alignment, Corpus, Utterance
 
-__all__ = ["random_alignment", "make_corpus", "dam_parameters"]
+__all__ = ["random_alignment", "insert_segment", "make_corpus", "dam_parameters"]
 
 
 def random_alignment(
@@ -59,6 +59,35 @@ def random_alignment(
     d = np.array([rng.uniform(lo, hi) for lo, hi in lohi])
     ends = np.cumsum(d)
     return Alignment(labels, ends - d, ends, source=source)
+
+
+def insert_segment(alignment: Alignment, j: int, phone: str, length: float) -> Alignment:
+    """``alignment`` with a segment of ``phone``, ``length`` seconds long, cut from the start of segment ``j``.
+
+    How to stress a model with very short phones (a forced aligner's 10 ms
+    segment, or one shorter than a frame) in any context.
+
+    Parameters
+    ----------
+    alignment : Alignment
+    j : int
+        Segment to cut into; it must be longer than ``length``.
+    phone : str
+    length : float
+        Seconds.
+
+    Examples
+    --------
+    >>> a = Alignment(["sil", "a", "sil"], [0.0, 0.1, 0.3], [0.1, 0.3, 0.4])
+    >>> b = insert_segment(a, 1, "b", 0.01)
+    >>> b.labels, b.starts.round(2).tolist(), b.ends.round(2).tolist()
+    (('sil', 'b', 'a', 'sil'), [0.0, 0.1, 0.11, 0.3], [0.1, 0.11, 0.3, 0.4])
+    """
+    s = alignment.starts[j]
+    labels = list(alignment.labels[:j]) + [phone] + list(alignment.labels[j:])
+    starts = np.r_[alignment.starts[:j], s, s + length, alignment.starts[j + 1 :]]
+    ends = np.r_[alignment.ends[:j], s + length, alignment.ends[j:]]
+    return Alignment(labels, starts, ends, source=alignment.source, silence=alignment.silence)
 
 
 def make_corpus(

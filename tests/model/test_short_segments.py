@@ -26,6 +26,7 @@ import pytest
 
 import dam
 from dam import Alignment
+from dam.datasets.synthetic import insert_segment
 from dam.model import animeme as _animeme
 
 MODELS = [
@@ -37,15 +38,6 @@ MODELS = [
     ("mmm", {}),
     ("hmm", {}),
 ]
-
-
-def _with_short(a: Alignment, j: int, phone: str, length: float) -> Alignment:
-    """``a`` with a segment of ``length`` seconds cut from the start of segment ``j``."""
-    s = a.starts[j]
-    labels = list(a.labels[:j]) + [phone] + list(a.labels[j:])
-    starts = np.r_[a.starts[:j], s, s + length, a.starts[j + 1 :]]
-    ends = np.r_[a.ends[:j], s + length, a.ends[j:]]
-    return Alignment(labels, starts, ends, source=a.source)
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +71,7 @@ def test_one_frame_and_sub_frame_segments_make_no_spike(tiny, name, params):
         # the range of the data and of the model's own prediction without the short segment
         lo, hi = np.minimum(Y.min(axis=0), base.min(axis=0)), np.maximum(Y.max(axis=0), base.max(axis=0))
         for length in (1.0 / fr, 0.3 / fr):
-            y = model.predict(_with_short(a, j, phone, length))
+            y = model.predict(insert_segment(a, j, phone, length))
             assert y.shape == base.shape
             assert np.all(y >= lo - 0.25 * span) and np.all(y <= hi + 0.25 * span), (
                 f"{name}: a {length * 1e3:.1f} ms segment drives a frame outside the data's range"
@@ -215,7 +207,7 @@ def test_dam_paper_runtime_stream_and_model_file_render_the_same(tiny, paper, tm
     from dam.export.streaming import StreamingSynthesizer
 
     _, test = tiny
-    aligns = [_with_short(u.alignment, 2, "aa", length) for u in list(test)[:3] for length in (0.01, 0.003)]
+    aligns = [insert_segment(u.alignment, 2, "aa", length) for u in list(test)[:3] for length in (0.01, 0.003)]
     paper.save(tmp_path / "p.dam")
     loaded = dam.load(tmp_path / "p.dam")
     np.testing.assert_array_equal(loaded.support_, paper.support_)

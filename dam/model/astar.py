@@ -494,6 +494,8 @@ class ModeGraph:
         from dam.model.animeme import boundary_derivatives
 
         G = self.G
+        if len(joints) == 0:  # a one-phone utterance has no joint
+            return np.zeros((0, G, G))
         idx = first[:, None] + np.minimum(np.arange(G), count[:, None] - 1)
         d = np.asarray(durations, dtype=float)
         prev = boundary_derivatives(coef[idx[joints]], order=2)[:, :, 1]  # (n_joints, G, 3, C) at t = 1

@@ -69,14 +69,14 @@ def dominance(t, sigma, eps: float = 1e-8, tol: float = 0.0):
     return dominance_of_distance(u * u, np.asarray(sigma, dtype=float) ** 2 + eps, tol)
 
 
-def dominance_of_distance(u2, s2, tol: float = 0.0, out=None) -> np.ndarray:
+def dominance_of_distance(u2, s2, tol: float = 0.0) -> np.ndarray:
     """Eq. (1) from the squared distance ``u2`` outside [0, 1] and ``s2 = sigma^2 + eps``.
 
     The core of :func:`dominance`, for callers that hold ``u^2`` per frame and
     ``s2`` per segment already (synthesis evaluates it for every frame/segment
-    pair). Broadcasts ``u2`` against ``s2``; ``out``, if given, receives the result.
+    pair). Broadcasts ``u2`` against ``s2``.
     """
-    d = np.asarray(np.exp(np.negative(u2 / s2), out=out))
+    d = np.asarray(np.exp(-u2 / s2))
     if tol > 0.0:
         d[d < tol] = 0.0
     return d

@@ -11,7 +11,10 @@ constant.
 
 The same frame/segment pairs (:func:`segment_windows`) build the E-step's
 design matrix and the M-step's Jacobian, so training and synthesis cannot
-disagree on what the model is.
+disagree on what the model is. A call with a few phones sums over every
+(frame, segment) pair instead: the pairs the windows leave out have a
+dominance below the tolerance, which truncation zeroes, so the sum is the same
+(``tests/model/test_paper_steps.py`` holds both to Eq. (2) written out by hand).
 
 numpy only: a saved DAM loads and synthesizes with this module, without
 scipy or scikit-learn.
@@ -27,8 +30,8 @@ from dam.model.dominance import dominance_of_distance, outside_distance, reach
 __all__ = ["segment_windows", "concatenate"]
 
 #: :func:`concatenate` evaluates every (frame, segment) pair when there are at most this
-#: many (one to three phones), else only the pairs of :func:`segment_windows`: the
-#: measured crossover of the two on one core (benchmarks/bench_dam.py).
+#: many (one to three phones), else only the pairs of :func:`segment_windows`: about where
+#: the two cost the same (a few phones pay for numpy steps, not for pairs).
 DENSE_PAIRS = 400
 
 
@@ -68,16 +71,11 @@ def segment_windows(starts, ends, sigma_max, frame_rate: float, n_frames: int, e
     lo = np.minimum(np.maximum(np.ceil((starts - r) * frame_rate - 1e-9), 0), n_frames).astype(np.int64)
     hi = np.minimum(np.maximum(np.floor((ends + r) * frame_rate + 1e-9) + 1, lo), n_frames).astype(np.int64)
     counts = hi - lo
-    if len(counts) == 1:  # (one phone per call, as a streaming caller makes them)
-        frame = np.arange(lo[0], hi[0])
-        seg = np.zeros(frame.size, dtype=np.int64)
-        t = (frame / frame_rate - starts[0]) / dur[0]
-    else:
-        seg = np.repeat(np.arange(len(starts)), counts)
-        # frame = lo[seg] + position within the segment's window
-        first = np.cumsum(counts) - counts
-        frame = np.arange(seg.size) + (lo - first)[seg]
-        t = (frame / frame_rate - starts[seg]) / dur[seg]
+    seg = np.repeat(np.arange(len(starts)), counts)
+    # frame = lo[seg] + position within the segment's window
+    first = np.cumsum(counts) - counts
+    frame = np.arange(seg.size) + (lo - first)[seg]
+    t = (frame / frame_rate - starts[seg]) / dur[seg]
     return seg, frame, t
 
 

@@ -166,6 +166,13 @@ def test_select_modes_equals_dynamic_programming_on_the_model_graph():
         assert (glob - first).tolist() == path
         assert cost == pytest.approx(want, rel=1e-10)
         assert m.explain(a)[-1]["total"] == pytest.approx(want, rel=1e-10)
+    # a one-phone call reads E_c from the counts directly: the same choice as the graph's
+    for p in phones:
+        a = Alignment([p], [0.0], [0.12])
+        nodes, edges, _ = m._graph(a.labels, a.durations)
+        assert m.select_modes(a)[0][0] - m.phone_modes_[p][0] == int(np.argmin(nodes[0]))
+        assert m.select_modes(a)[1] == pytest.approx(float(nodes[0].min()), rel=1e-12)
+        assert m.explain(a)[-1]["total"] == pytest.approx(float(nodes[0].min()), rel=1e-12)
 
 
 def test_em_that_stops_at_max_iter_warns_naming_the_channels():

@@ -500,10 +500,12 @@ class DAM(Synthesizer):
     def _choose(self, alignment: Alignment, method: str = "dp"):
         """Section VI: global mode and first global mode of every segment, and the node costs.
 
-        ``method="dp"`` (synthesis): the chain split at single-mode segments,
-        short blocks costed in full, long ones by :func:`dam.model.astar.chain_dp`
-        (:func:`dam.model.astar.free_path`); ``"astar"``: the paper's A* on the
-        whole graph. Both return the cheapest path (the tests prove them equal).
+        ``method="dp"`` (synthesis): the chain split at single-mode segments and
+        every block of multi-mode segments solved exactly by dynamic programming,
+        all blocks together (:func:`dam.model.astar.free_path`); ``"astar"``: the
+        paper's A* on the whole graph. Both return the cheapest path (the tests
+        prove them equal). A one-phone alignment needs no search: its cheapest
+        ``E_c``, read from the context counts (:func:`dam.model.astar.mode_nll`).
         """
         graph = self._graph_of()
         labels, pid, first, count = self._layers(alignment, graph)
